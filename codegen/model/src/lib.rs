@@ -1,0 +1,94 @@
+//! The seam between generated and hand-written code: the traits every twv model implements.
+//!
+//! Conventions (shared by generated code, the IR interpreter and all analysis code):
+//! - Sizes are const generics: `NX` states, `NU` inputs. Parameters live inside the model value
+//!   (runtime struct) or are folded as constants (baked build); they are not an argument.
+//! - Vectors are `[f64; N]`. Dense matrices are row-major arrays of rows:
+//!   `jac[i][j] = ∂f_i/∂x_j`. The sparse Jacobian is in compressed-column (CCS) order, the order
+//!   CasADi and the IR use: `jac_x_colind()` has `NX + 1` entries, `jac_x_row()` the row of each
+//!   stored value.
+//! - Tangent vectors for the variational equations are `[[f64; NX]; K]`: `w[k]` is the k-th
+//!   vector and `jw` writes `out[k] = (∂f/∂x) w[k]`.
+//! - No method allocates or panics for finite or non-finite inputs; non-finite inputs give
+//!   non-finite outputs.
+#![no_std]
+
+/// Names and descriptive metadata of a model.
+#[derive(Debug, Clone, Copy)]
+pub struct ModelInfo {
+    /// Model name (the CLI's `--model` value).
+    pub name: &'static str,
+    /// Content hash of the IR the code came from (`sha256:...`), or "" for hand-written models.
+    pub ir_hash: &'static str,
+    /// State names, in state order.
+    pub states: &'static [&'static str],
+    /// Input names, in input order.
+    pub inputs: &'static [&'static str],
+    /// Parameter names, in parameter order.
+    pub params: &'static [&'static str],
+}
+
+/// A model ẋ = f(x, u) with its Jacobians.
+pub trait Model<const NX: usize, const NU: usize> {
+    /// Names of the model, its states, inputs and parameters.
+    fn info(&self) -> ModelInfo;
+
+    /// ẋ = f(x, u).
+    fn f(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [f64; NX]);
+
+    /// Dense ∂f/∂x, row-major.
+    fn jac_x(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NX]; NX]);
+
+    /// Dense ∂f/∂u, row-major (`out[i][j] = ∂f_i/∂u_j`).
+    fn jac_u(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NU]; NX]);
+
+    /// Column pointers of the structural non-zeros of ∂f/∂x (CCS, `NX + 1` entries).
+    fn jac_x_colind(&self) -> &[usize];
+
+    /// Row of each structural non-zero of ∂f/∂x (CCS order).
+    fn jac_x_row(&self) -> &[usize];
+
+    /// The structural non-zeros of ∂f/∂x in CCS order; `values.len()` must equal
+    /// `jac_x_row().len()` (shorter slices are filled as far as they go).
+    fn jac_x_sparse(&self, x: &[f64; NX], u: &[f64; NU], values: &mut [f64]);
+
+    /// ẋ and `out[k] = (∂f/∂x) w[k]` together: the hot kernel of the variational equations.
+    fn f_jw<const K: usize>(
+        &self,
+        x: &[f64; NX],
+        u: &[f64; NU],
+        w: &[[f64; NX]; K],
+        f: &mut [f64; NX],
+        out: &mut [[f64; NX]; K],
+    );
+
+    /// `out[k] = (∂f/∂x) w[k]` without ẋ.
+    fn jw<const K: usize>(
+        &self,
+        x: &[f64; NX],
+        u: &[f64; NU],
+        w: &[[f64; NX]; K],
+        out: &mut [[f64; NX]; K],
+    ) {
+        let mut f = [0.0; NX];
+        self.f_jw(x, u, w, &mut f, out);
+    }
+}
+
+/// The parts of a mechanical model in Poincaré form M(q) ṗ + C(q,p) p + F(q) = Q(u), used by
+/// the audit and the invariant checks. `NS` is the number of quasi-velocities (the last `NS`
+/// states). Matrices are row-major.
+pub trait Mechanical<const NX: usize, const NU: usize, const NS: usize>: Model<NX, NU> {
+    /// Mass matrix M(q).
+    fn mass_matrix(&self, x: &[f64; NX], out: &mut [[f64; NS]; NS]);
+    /// Velocity terms C(q,p) p.
+    fn cp(&self, x: &[f64; NX], out: &mut [f64; NS]);
+    /// Gravity terms F(q).
+    fn gravity(&self, x: &[f64; NX], out: &mut [f64; NS]);
+    /// Generalized input forces Q(u) (may depend on q).
+    fn input_forces(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [f64; NS]);
+    /// Total energy T + V.
+    fn energy(&self, x: &[f64; NX]) -> f64;
+    /// Planar linear momentum (X, Y) and angular momentum about the inertial origin (Z).
+    fn momentum(&self, x: &[f64; NX]) -> [f64; 3];
+}

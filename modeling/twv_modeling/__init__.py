@@ -1,0 +1,1 @@
+"""twv modeling: multibody descriptions -> Euler-Poincare equations (CasADi) -> model IR."""

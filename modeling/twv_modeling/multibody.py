@@ -1,0 +1,422 @@
+"""Multibody systems described as data, and their Euler-Poincare (Hamel) equations.
+
+Like ProPac: joints, bodies, the tree they form, gravity, velocity constraints and input maps go
+in; out come V(q), M(q), C(q,p)p, F(q), Q(u) and the state equations
+
+    q_dot = V(q) p,    M(q) p_dot + C(q,p) p + F(q) = Q(u).
+
+The equations are Hamel's equations in the quasi-velocities p of the *unconstrained* system,
+
+    d/dt dL/dp_k - X_k(L) - sum_{j,l} gamma^l_{jk} p_j dL/dp_l = Q_k,
+
+with X_k = V[:, k] and [X_j, X_k] = sum_l gamma^l_{jk} X_l. Nonholonomic constraints are imposed
+the Kwatny/ProPac way: the quasi-velocities are changed so that each constraint reads
+"a constraint speed is zero", the equations are written for the admissible speeds only, and the
+constraint speeds are set to zero *after* differentiating. Substituting the constraint into the
+Lagrangian first would drop the gyroscopic terms gamma * dL/dp_c that do no work.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import casadi as ca
+
+from .derived import DerivedModel, Signal
+from .kinematics import AXES, Body, PlanarJoint, RevoluteJoint, vec3
+from .linsolve import solve_spd
+from .params import Param
+
+GROUND = "N"
+
+
+@dataclass
+class Constraint:
+    """A velocity constraint solved for one quasi-velocity.
+
+    `expression(speeds)` gives the dependent speed as a linear combination of the independent
+    ones (a dict name -> symbol); its coefficients may depend on parameters, not on coordinates.
+    """
+
+    dependent: str
+    expression: Callable[[dict], ca.SX]
+    description: str = ""
+
+
+@dataclass
+class ForceInput:
+    """Input force along `direction` (frame components) at the origin of `frame`."""
+
+    input: str
+    frame: str
+    direction: tuple
+
+
+@dataclass
+class TorqueInput:
+    """Input torque about `axis` (frame components) on `frame`, its reaction on `reaction`."""
+
+    input: str
+    frame: str
+    axis: str
+    reaction: str | None = None
+
+
+@dataclass
+class MultibodySystem:
+    name: str
+    description: str
+    params: list[Param]
+    coordinates: list[Signal]
+    speeds: list[Signal]
+    joints: list[PlanarJoint | RevoluteJoint]
+    bodies: list[Body]
+    inputs: list[Signal]
+    input_maps: list[ForceInput | TorqueInput]
+    gravity: str = "g"
+    constraints: tuple[Constraint, ...] = ()
+
+
+class ModelError(ValueError):
+    """A multibody description that cannot be derived (the message says why)."""
+
+
+@dataclass
+class _Frame:
+    """Kinematics of one frame F, in the components of its reference frame G.
+
+    G is the child frame of the nearest planar joint at or above F (or N): velocities are
+    native there, so expressions stay free of unsimplified sin^2 + cos^2 from rotating back and
+    forth. `rot` is R_GF (F components -> G components)."""
+
+    ref: str
+    omega: ca.SX  # angular velocity of F, G components
+    velocity: ca.SX  # velocity of F's origin, G components
+    rot: ca.SX  # R_GF
+
+
+class _Kinematics:
+    """Frame twists and poses of a system for given coordinate and speed symbols."""
+
+    def __init__(self, system: MultibodySystem, q: dict, p: dict):
+        self.joints = {j.name: j for j in system.joints}
+        zero = vec3((0, 0, 0))
+        self.frames = {GROUND: _Frame(GROUND, zero, zero, ca.SX.eye(3))}
+        self.relative = {}
+        self.translation = {}
+        for joint in self._ordered(system.joints):
+            parent = self.frames[joint.parent]
+            qj = [q[c] for c in joint.coords]
+            pj = [p[s] for s in joint.speeds]
+            R, t = joint.rotation(qj), joint.translation(qj)
+            w_rel, v_rel = joint.twist(pj)
+            self.relative[joint.name], self.translation[joint.name] = R, t
+            t_ref = parent.rot @ t
+            if isinstance(joint, PlanarJoint):
+                # New reference frame: express the parent's twist in the child's components.
+                to_child = R.T @ parent.rot.T
+                self.frames[joint.name] = _Frame(
+                    ref=joint.name,
+                    omega=to_child @ parent.omega + w_rel,
+                    velocity=to_child @ (parent.velocity + ca.cross(parent.omega, t_ref)) + v_rel,
+                    rot=ca.SX.eye(3),
+                )
+            else:
+                rot = parent.rot @ R
+                self.frames[joint.name] = _Frame(
+                    ref=parent.ref,
+                    omega=parent.omega + rot @ w_rel,
+                    velocity=parent.velocity + ca.cross(parent.omega, t_ref) + rot @ v_rel,
+                    rot=rot,
+                )
+
+    def _ordered(self, joints):
+        done, ordered, pending = {GROUND}, [], list(joints)
+        while pending:
+            ready = [j for j in pending if j.parent in done]
+            if not ready:
+                names = ", ".join(j.name for j in pending)
+                raise ModelError(f"joints {names} are not connected to the ground frame {GROUND}")
+            for j in ready:
+                parent = self.joints.get(j.parent)
+                if isinstance(parent, RevoluteJoint) and parent.axisymmetric:
+                    raise ModelError(f"joint {j.name}: a rotor frame ({j.parent}) carries bodies only")
+                ordered.append(j)
+                done.add(j.name)
+                pending.remove(j)
+        return ordered
+
+    def _path(self, frame: str) -> list[str]:
+        path = []
+        while frame != GROUND:
+            path.append(frame)
+            frame = self.joints[frame].parent
+        return list(reversed(path))
+
+    def rotation_between(self, target: str, source: str) -> ca.SX:
+        """R such that (source components) -> (target components), composed along the tree so
+        that rotations above the common ancestor (the yaw) cancel exactly."""
+        a, b = self._path(target), self._path(source)
+        n = 0
+        while n < min(len(a), len(b)) and a[n] == b[n]:
+            n += 1
+        r_a, r_b = ca.SX.eye(3), ca.SX.eye(3)
+        for f in a[n:]:
+            r_a = r_a @ self.relative[f]
+        for f in b[n:]:
+            r_b = r_b @ self.relative[f]
+        return r_a.T @ r_b
+
+    def position(self, frame: str) -> tuple[ca.SX, ca.SX]:
+        """Origin position in N and R_NF, composed from the root."""
+        origin, rot = vec3((0, 0, 0)), ca.SX.eye(3)
+        for f in self._path(frame):
+            origin = origin + rot @ self.translation[f]
+            rot = rot @ self.relative[f]
+        return origin, rot
+
+
+@dataclass
+class _BodyKinematics:
+    mass: ca.SX
+    inertia: ca.SX
+    v: ca.SX  # centroid velocity, reference components
+    omega: ca.SX  # angular velocity, body components
+    height: ca.SX  # centroid height in N
+    lin: ca.SX  # linear momentum, N components
+    ang: ca.SX  # angular momentum about the N origin, z component
+
+
+def _body_kinematics(kin: _Kinematics, body: Body) -> _BodyKinematics:
+    fr = kin.frames[body.frame]
+    c = vec3(body.centroid)
+    inertia = ca.diag(vec3(body.inertia))
+    v_c = fr.velocity + ca.cross(fr.omega, fr.rot @ c)
+    omega_body = fr.rot.T @ fr.omega
+    origin, rot_nf = kin.position(body.frame)
+    _, rot_ng = kin.position(fr.ref) if fr.ref != GROUND else (None, ca.SX.eye(3))
+    r_c = origin + rot_nf @ c
+    lin = body.mass * (rot_ng @ v_c)
+    ang = ca.cross(r_c, lin)[2] + (rot_nf @ (inertia @ omega_body))[2]
+    return _BodyKinematics(body.mass, inertia, v_c, omega_body, r_c[2], lin, ang)
+
+
+def _input_power(kin: _Kinematics, m, u: dict) -> ca.SX:
+    fr = kin.frames[m.frame]
+    if isinstance(m, ForceInput):
+        return u[m.input] * ca.dot(fr.rot @ vec3(m.direction), fr.velocity)
+    axis = fr.rot @ vec3(AXES[m.axis])
+    omega = fr.omega
+    if m.reaction is not None:
+        other = kin.frames[m.reaction]
+        to_ref = kin.rotation_between(fr.ref, other.ref) if other.ref != fr.ref else ca.SX.eye(3)
+        omega = omega - to_ref @ other.omega
+    return u[m.input] * ca.dot(axis, omega)
+
+
+def _check_rotor_bodies(system: MultibodySystem):
+    joints = {j.name: j for j in system.joints}
+    for body in system.bodies:
+        j = joints.get(body.frame)
+        if isinstance(j, RevoluteJoint) and j.axisymmetric:
+            axis = "xyz".index(j.axis)
+            transverse = [body.inertia[i] for i in range(3) if i != axis]
+            same = ca.is_equal(ca.SX(transverse[0]), ca.SX(transverse[1]), 2)
+            if any(ca.SX(e).is_zero() is False for e in body.centroid) or not same:
+                raise ModelError(
+                    f"body {body.name} on rotor {j.name}: needs its centroid on the axis and equal "
+                    "transverse inertias"
+                )
+
+
+def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> DerivedModel:
+    """Derive the Poincare equations of `system` and return the model for export."""
+    coord_names = [c.name for c in system.coordinates]
+    speed_names = [s.name for s in system.speeds]
+    n = len(coord_names)
+    if len(speed_names) != n:
+        raise ModelError("as many quasi-velocities as coordinates are needed")
+    _check_rotor_bodies(system)
+    joint_coords = [c for j in system.joints for c in j.coords]
+    if sorted(joint_coords) != sorted(coord_names):
+        raise ModelError("every coordinate must belong to exactly one joint")
+
+    q = {c: ca.SX.sym(c) for c in coord_names}
+    pf = {s: ca.SX.sym(s) for s in speed_names}
+    u = {i.name: ca.SX.sym(i.name) for i in system.inputs}
+    q_vec = ca.vertcat(*[q[c] for c in coord_names])
+    u_vec = ca.vertcat(*[u[i.name] for i in system.inputs])
+    g = param_symbols[system.gravity]
+
+    # V(q) and the structure coefficients of the full quasi-velocities, joint by joint.
+    V_full = ca.SX(n, n)
+    gamma = [[[0 for _ in range(n)] for _ in range(n)] for _ in range(n)]
+    for j in system.joints:
+        ci = [coord_names.index(c) for c in j.coords]
+        si = [speed_names.index(s) for s in j.speeds]
+        Vj = j.velocity_map([q[c] for c in j.coords])
+        gj = j.structure()
+        for a, ia in enumerate(ci):
+            for b, ib in enumerate(si):
+                V_full[ia, ib] = Vj[a, b]
+        for lo, il in enumerate(si):
+            for jo, ij in enumerate(si):
+                for ko, ik in enumerate(si):
+                    gamma[il][ij][ik] = gj[lo][jo][ko]
+
+    kin = _Kinematics(system, q, pf)
+    bodies = [_body_kinematics(kin, b) for b in system.bodies]
+    U = sum(b.mass * g * b.height for b in bodies)
+    lin = sum((b.lin for b in bodies), vec3((0, 0, 0)))
+    ang = sum(b.ang for b in bodies)
+    power = sum(_input_power(kin, m, u) for m in system.input_maps)
+
+    # Change of quasi-velocities: independent speeds plus one constraint speed per constraint.
+    dependent = [c.dependent for c in system.constraints]
+    independent = [s for s in speed_names if s not in dependent]
+    cspeed = {d: ca.SX.sym(f"c_{d}") for d in dependent}
+    full_of_new = dict(pf)
+    ind_syms = {s: pf[s] for s in independent}
+    for con in system.constraints:
+        full_of_new[con.dependent] = con.expression(ind_syms) + cspeed[con.dependent]
+    new_speeds = [pf[s] for s in independent] + [cspeed[d] for d in dependent]
+    p_new = ca.vertcat(*new_speeds)
+    pf_vec = ca.vertcat(*[pf[s] for s in speed_names])
+    pf_expr = ca.vertcat(*[full_of_new[s] for s in speed_names])
+    Tmat = ca.jacobian(pf_expr, p_new)
+    if ca.depends_on(Tmat, ca.vertcat(q_vec, p_new)):
+        raise ModelError("constraints must be linear in the speeds with coordinate-free coefficients")
+    Tinv = _inverse_of_speed_change(speed_names, independent, system.constraints, ind_syms, pf)
+    gamma_new = _transform_structure(gamma, Tmat, Tinv, n)
+
+    def to_new(e):
+        return ca.substitute(e, pf_vec, pf_expr)
+
+    power_new = to_new(power)
+    lin_new, ang_new = to_new(lin), to_new(ang)
+    V_new = V_full @ Tmat
+
+    # Kinetic energy and its derivatives by the chain rule, body by body (v and omega are linear
+    # in p): M = sum m Jv^T Jv + Jw^T I Jw, P = dT/dp = M p, dT/dq = sum m (dv/dq)^T v + ...
+    M_full, P, dT_dq, T_new = ca.SX(n, n), ca.SX(n, 1), ca.SX(n, 1), 0
+    for b in bodies:
+        v, w = to_new(b.v), to_new(b.omega)
+        Iw = b.inertia @ w
+        Jv, Jw = ca.jacobian(v, p_new), ca.jacobian(w, p_new)
+        M_full = M_full + b.mass * (Jv.T @ Jv) + Jw.T @ (b.inertia @ Jw)
+        P = P + b.mass * (Jv.T @ v) + Jw.T @ Iw
+        dT_dq = dT_dq + b.mass * (ca.jacobian(v, q_vec).T @ v) + ca.jacobian(w, q_vec).T @ Iw
+        T_new = T_new + 0.5 * b.mass * ca.dot(v, v) + 0.5 * ca.dot(w, Iw)
+    qdot = V_new @ p_new
+    Cp_full = ca.jacobian(P, q_vec) @ qdot - V_new.T @ dT_dq
+    for k in range(n):
+        term = 0
+        for b in range(n):
+            for j in range(n):
+                if not _zero(gamma_new[b][j][k]):
+                    term = term + gamma_new[b][j][k] * p_new[j] * P[b]
+        Cp_full[k] = Cp_full[k] - term
+    F_full = V_new.T @ ca.gradient(U, q_vec)
+    Q_full = ca.gradient(power_new, p_new)
+
+    # Project onto the admissible speeds and only then impose the constraints (c = 0).
+    m = len(independent)
+    c_vec = ca.vertcat(*[cspeed[d] for d in dependent]) if dependent else ca.SX(0, 1)
+
+    def on_constraint(e):
+        return ca.substitute(e, c_vec, ca.SX.zeros(c_vec.numel())) if dependent else e
+
+    # Merging common subexpressions also cancels exact repeats (a - a = 0), so entries that
+    # vanish identically, such as the left/right wheel cross terms, become structural zeros.
+    M = ca.cse(on_constraint(M_full[:m, :m]))
+    Cp = ca.cse(on_constraint(Cp_full[:m]))
+    F = ca.cse(on_constraint(F_full[:m]))
+    Q = ca.cse(on_constraint(Q_full[:m]))
+    energy = ca.cse(on_constraint(T_new + U))
+    momentum = ca.cse(on_constraint(ca.vertcat(lin_new[0], lin_new[1], ang_new)))
+
+    # Ignorable coordinates (rotor angles) leave the state; check that nothing depends on them.
+    rotor_coords = [
+        j.coord for j in system.joints if isinstance(j, RevoluteJoint) and j.axisymmetric
+    ]
+    state_coords = [c for c in coord_names if c not in rotor_coords]
+    rotor_vec = ca.vertcat(*[q[c] for c in rotor_coords]) if rotor_coords else ca.SX(0, 1)
+    for name, e in (("M", M), ("Cp", Cp), ("F", F), ("Q", Q), ("energy", energy)):
+        if rotor_coords and ca.depends_on(e, rotor_vec):
+            raise ModelError(f"{name} depends on the rotor angle; the rotor is not axisymmetric")
+
+    p_ind = p_new[:m]
+    rows = [coord_names.index(c) for c in state_coords]
+    qdot_state = on_constraint(ca.vertcat(*[qdot[r] for r in rows]))
+    pdot = solve_spd(M, Q - Cp - F)
+    x = ca.vertcat(*[q[c] for c in state_coords], p_ind)
+
+    states = [c for c in system.coordinates if c.name in state_coords] + [
+        s for s in system.speeds if s.name in independent
+    ]
+    return DerivedModel(
+        name=system.name,
+        kind="multibody",
+        description=system.description,
+        states=states,
+        inputs=list(system.inputs),
+        params=list(system.params),
+        x=x,
+        u=u_vec,
+        p=p_vec,
+        expressions={
+            "f": ca.vertcat(qdot_state, pdot),
+            "M": M,
+            "Cp": Cp,
+            "F": F,
+            "Q": Q,
+            "energy": energy,
+            "momentum": momentum,
+        },
+        header={
+            "coordinates": state_coords,
+            "ignorable_coordinates": rotor_coords,
+            "speeds": independent,
+            "constraints": [
+                {"dependent": c.dependent, "description": c.description}
+                for c in system.constraints
+            ],
+            "mass_matrix_solve": "symbolic LDL^T in f (structural zeros kept)",
+        },
+    )
+
+
+def _zero(e) -> bool:
+    if isinstance(e, int | float):
+        return e == 0
+    return ca.SX(e).is_zero()
+
+
+def _inverse_of_speed_change(speed_names, independent, constraints, ind_syms, pf):
+    """Tinv with p_new = Tinv p_full: independent speeds unchanged, c_d = p_d - A_d p_ind."""
+    rows = [pf[s] for s in independent]
+    for con in constraints:
+        rows.append(pf[con.dependent] - con.expression(ind_syms))
+    pf_vec = ca.vertcat(*[pf[s] for s in speed_names])
+    return ca.jacobian(ca.vertcat(*rows), pf_vec)
+
+
+def _transform_structure(gamma, Tmat, Tinv, n):
+    """Structure coefficients in the new speeds: g'^f_ac = Tinv_fe g^e_bd T_ba T_dc."""
+    out = [[[ca.SX(0) for _ in range(n)] for _ in range(n)] for _ in range(n)]
+    entries = [
+        (e, b, d, gamma[e][b][d])
+        for e in range(n)
+        for b in range(n)
+        for d in range(n)
+        if not _zero(gamma[e][b][d])
+    ]
+    for f in range(n):
+        for a in range(n):
+            for c in range(n):
+                acc = ca.SX(0)
+                for e, b, d, val in entries:
+                    acc = acc + Tinv[f, e] * val * Tmat[b, a] * Tmat[d, c]
+                out[f][a][c] = acc
+    return out

@@ -1,0 +1,42 @@
+"""Build a shipped model (or a user's model file) into a DerivedModel with its default values."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .derived import DerivedModel
+from .explicit import load_model_file
+from .models import EXPLICIT, EXPLICIT_DIR, SHIPPED, VEHICLES
+from .models import vehicles as vehicle_models
+from .multibody import derive
+from .params import Param, load_values
+
+REPO_ROOT = Path(__file__).resolve().parents[2]
+VEHICLES_DIR = REPO_ROOT / "vehicles"
+
+
+class UnknownModelError(ValueError):
+    pass
+
+
+def build(name: str) -> DerivedModel:
+    """Derive a shipped model; vehicle defaults come from its reference parameter file."""
+    if name in VEHICLES:
+        P, p_vec = vehicle_models.symbols()
+        model = derive(vehicle_models.BUILDERS[name](P), P, p_vec)
+        source = vehicle_models.PARAMS_SOURCE[name]
+        values = load_values(VEHICLES_DIR / source, model.params)
+        model.params = [_with_default(p, v) for p, v in zip(model.params, values, strict=True)]
+        model.params_source = f"vehicles/{source}"
+        return model
+    if name in EXPLICIT:
+        return load_model_file(EXPLICIT_DIR / f"{name}.py")
+    raise UnknownModelError(f"unknown model `{name}` (shipped: {', '.join(SHIPPED)})")
+
+
+def build_file(path: Path) -> DerivedModel:
+    return load_model_file(path)
+
+
+def _with_default(p: Param, value: float) -> Param:
+    return Param(p.name, p.unit, p.kind, p.key, p.index, value, p.description)
