@@ -1,0 +1,6 @@
+//! twv analysis: everything that runs a model — integrators, Lyapunov spectra, the hand model
+//! and audit, control, tuning, sweeps, reports — and the `twv` command line.
+
+pub mod hand_model;
+pub mod integrate;
+pub mod lyapunov;
