@@ -86,6 +86,14 @@ def cmd_summary(args) -> int:
     return 0
 
 
+def cmd_export_c(args) -> int:
+    from .cgen import export_c
+
+    path = export_c(build(args.model), Path(args.out_dir))
+    print(path)
+    return 0
+
+
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="python -m twv_modeling", description=__doc__)
     sub = ap.add_subparsers(dest="command", required=True)
@@ -104,6 +112,10 @@ def parser() -> argparse.ArgumentParser:
     s = sub.add_parser("summary", help="print the derived equations of the shipped models")
     s.add_argument("--model", choices=SHIPPED, metavar="NAME")
     s.set_defaults(run=cmd_summary)
+    e = sub.add_parser("export-c", help="write CasADi's own C code of a model (benchmark peer)")
+    e.add_argument("--model", choices=SHIPPED, metavar="NAME", required=True)
+    e.add_argument("--out-dir", required=True)
+    e.set_defaults(run=cmd_export_c)
     return ap
 
 

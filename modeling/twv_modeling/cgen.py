@@ -1,0 +1,43 @@
+"""CasADi's own C code for a model: the peer the Rust kernels are benchmarked against.
+
+Writes `<model>_casadi.c` (and `.h`) with, for runtime parameters, `f(x,u,p)`, `f_jac_x(x,u,p)`
+and `f_jw8(x,u,p,W)` (ẋ and ∂f/∂x · W for 8 tangent vectors, W an NX x 8 matrix), and the same
+with the default parameters folded in (`*_baked`, arguments x, u[, W]). Parameters are substituted
+into f and its Jacobian jointly so common subexpressions stay shared.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import casadi as ca
+
+from .derived import DerivedModel
+
+TANGENTS = 8
+
+
+def export_c(model: DerivedModel, out_dir: Path) -> Path:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    x, u, p = model.x, model.u, model.p
+    f = model.expressions["f"]
+    jac = ca.jacobian(f, x)
+    W = ca.SX.sym("W", x.numel(), TANGENTS)
+    jw = ca.mtimes(jac, W)
+    defaults = ca.DM([prm.default for prm in model.params])
+    baked = ca.substitute([f, jac, jw], [p], [defaults])
+    opts = {"cse": True}
+    funcs = [
+        ca.Function("f", [x, u, p], [f], opts),
+        ca.Function("f_jac_x", [x, u, p], [f, jac], opts),
+        ca.Function(f"f_jw{TANGENTS}", [x, u, p, W], [f, jw], opts),
+        ca.Function("f_baked", [x, u], [baked[0]], opts),
+        ca.Function("f_jac_x_baked", [x, u], [baked[0], baked[1]], opts),
+        ca.Function(f"f_jw{TANGENTS}_baked", [x, u, W], [baked[0], baked[2]], opts),
+    ]
+    name = f"{model.name}_casadi"
+    cg = ca.CodeGenerator(f"{name}.c", {"with_header": True, "prefix": f"{model.name}_"})
+    for fn in funcs:
+        cg.add(fn)
+    cg.generate(str(out_dir) + "/")
+    return out_dir / f"{name}.c"
