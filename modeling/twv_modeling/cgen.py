@@ -1,7 +1,7 @@
 """CasADi's own C code for a model: the peer the Rust kernels are benchmarked against.
 
-Writes `<model>_casadi.c` (and `.h`) with, for runtime parameters, `f(x,u,p)`, `f_jac_x(x,u,p)`
-and `f_jw8(x,u,p,W)` (ẋ and ∂f/∂x · W for 8 tangent vectors, W an NX x 8 matrix), and the same
+Writes `<model>_casadi.c` (and `.h`) with, for runtime parameters, `<model>_f(x,u,p)`,
+`<model>_f_jac_x(x,u,p)` and `<model>_f_jw8(x,u,p,W)` (ẋ and ∂f/∂x · W for 8 tangent vectors, W an NX x 8 matrix), and the same
 with the default parameters folded in (`*_baked`, arguments x, u[, W]). Parameters are substituted
 into f and its Jacobian jointly so common subexpressions stay shared.
 """
@@ -27,16 +27,17 @@ def export_c(model: DerivedModel, out_dir: Path) -> Path:
     defaults = ca.DM([prm.default for prm in model.params])
     baked = ca.substitute([f, jac, jw], [p], [defaults])
     opts = {"cse": True}
+    m = model.name
     funcs = [
-        ca.Function("f", [x, u, p], [f], opts),
-        ca.Function("f_jac_x", [x, u, p], [f, jac], opts),
-        ca.Function(f"f_jw{TANGENTS}", [x, u, p, W], [f, jw], opts),
-        ca.Function("f_baked", [x, u], [baked[0]], opts),
-        ca.Function("f_jac_x_baked", [x, u], [baked[0], baked[1]], opts),
-        ca.Function(f"f_jw{TANGENTS}_baked", [x, u, W], [baked[0], baked[2]], opts),
+        ca.Function(f"{m}_f", [x, u, p], [f], opts),
+        ca.Function(f"{m}_f_jac_x", [x, u, p], [f, jac], opts),
+        ca.Function(f"{m}_f_jw{TANGENTS}", [x, u, p, W], [f, jw], opts),
+        ca.Function(f"{m}_f_baked", [x, u], [baked[0]], opts),
+        ca.Function(f"{m}_f_jac_x_baked", [x, u], [baked[0], baked[1]], opts),
+        ca.Function(f"{m}_f_jw{TANGENTS}_baked", [x, u, W], [baked[0], baked[2]], opts),
     ]
-    name = f"{model.name}_casadi"
-    cg = ca.CodeGenerator(f"{name}.c", {"with_header": True, "prefix": f"{model.name}_"})
+    name = f"{m}_casadi"
+    cg = ca.CodeGenerator(f"{name}.c", {"with_header": True, "prefix": f"{m}_"})
     for fn in funcs:
         cg.add(fn)
     cg.generate(str(out_dir) + "/")
