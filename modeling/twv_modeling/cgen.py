@@ -1,9 +1,10 @@
 """CasADi's own C code for a model: the peer the Rust kernels are benchmarked against.
 
 Writes `<model>_casadi.c` (and `.h`) with, for runtime parameters, `<model>_f(x,u,p)`,
-`<model>_f_jac_x(x,u,p)` and `<model>_f_jw8(x,u,p,W)` (ẋ and ∂f/∂x · W for 8 tangent vectors, W an NX x 8 matrix), and the same
-with the default parameters folded in (`*_baked`, arguments x, u[, W]). Parameters are substituted
-into f and its Jacobian jointly so common subexpressions stay shared.
+`<model>_f_jac_x(x,u,p)` and `<model>_f_jw8(x,u,p,W)` (f and J W for 8 tangent vectors, W an
+NX x 8 matrix), and the same with the default parameters folded in (`*_baked`, arguments x, u
+and W). Parameters are substituted into f and its Jacobian jointly so that common
+subexpressions stay shared.
 """
 
 from __future__ import annotations

@@ -58,9 +58,7 @@ def cmd_check(args) -> int:
             current = ir_dir / f"{name}.json"
             if not current.is_file() or current.read_bytes() != fresh.read_bytes():
                 stale.append(str(current))
-    extra = sorted(
-        str(p) for p in ir_dir.glob("*.json") if p.stem not in SHIPPED
-    )
+    extra = sorted(str(p) for p in ir_dir.glob("*.json") if p.stem not in SHIPPED)
     if stale or extra:
         for path in stale:
             print(f"stale IR: {path} (run `python -m twv_modeling derive --all`)", file=sys.stderr)
@@ -78,8 +76,10 @@ def cmd_summary(args) -> int:
         print(f"== {model.name} ({model.kind}): {model.description}")
         print("   states: " + ", ".join(f"{s.name} [{s.unit}]" for s in model.states))
         print("   inputs: " + (", ".join(f"{s.name} [{s.unit}]" for s in model.inputs) or "none"))
-        print(f"   params ({model.params_source}): "
-              + ", ".join(f"{p.name}={p.default:g}" for p in model.params))
+        print(
+            f"   params ({model.params_source}): "
+            + ", ".join(f"{p.name}={p.default:g}" for p in model.params)
+        )
         for part in ("M", "Cp", "F", "Q"):
             if part in model.expressions:
                 print(f"   {part} = {model.expressions[part]}")
@@ -100,8 +100,9 @@ def parser() -> argparse.ArgumentParser:
     d = sub.add_parser("derive", help="derive models and write their IR")
     which = d.add_mutually_exclusive_group(required=True)
     which.add_argument("--all", action="store_true", help="every shipped model into --out-dir")
-    which.add_argument("--model", choices=SHIPPED, metavar="NAME",
-                       help=f"one shipped model ({', '.join(SHIPPED)})")
+    which.add_argument(
+        "--model", choices=SHIPPED, metavar="NAME", help=f"one shipped model ({', '.join(SHIPPED)})"
+    )
     which.add_argument("--file", help="a user's explicit-ODE model file (defines model())")
     d.add_argument("--out", help="output IR path (with --model or --file)")
     d.add_argument("--out-dir", default=str(IR_DIR), help="output folder for --all")

@@ -59,8 +59,19 @@ class ExplicitModel:
         expressions = {"f": ca.vertcat(*[ca.SX(e) for e in self.rhs])}
         if self.energy is not None:
             expressions["energy"] = ca.SX(self.energy)
-        return DerivedModel(self.name, "explicit", self.description, self.states, self.inputs,
-                            self.params, x, u, p, expressions, params_source="defaults")
+        return DerivedModel(
+            self.name,
+            "explicit",
+            self.description,
+            self.states,
+            self.inputs,
+            self.params,
+            x,
+            u,
+            p,
+            expressions,
+            params_source="defaults",
+        )
 
 
 def load_model_file(path: Path) -> DerivedModel:

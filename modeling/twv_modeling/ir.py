@@ -25,13 +25,54 @@ HASH_PLACEHOLDER = "sha256:" + "0" * 64
 
 OP_NAMES = {getattr(ca, n): n[3:].lower() for n in dir(ca) if n.startswith("OP_")}
 UNARY = {
-    "neg", "exp", "log", "sqrt", "sq", "twice", "sin", "cos", "tan", "asin", "acos", "atan",
-    "fabs", "sign", "inv", "sinh", "cosh", "tanh", "asinh", "acosh", "atanh", "floor", "ceil",
-    "erf", "not", "log1p", "expm1",
+    "neg",
+    "exp",
+    "log",
+    "sqrt",
+    "sq",
+    "twice",
+    "sin",
+    "cos",
+    "tan",
+    "asin",
+    "acos",
+    "atan",
+    "fabs",
+    "sign",
+    "inv",
+    "sinh",
+    "cosh",
+    "tanh",
+    "asinh",
+    "acosh",
+    "atanh",
+    "floor",
+    "ceil",
+    "erf",
+    "not",
+    "log1p",
+    "expm1",
 }
 BINARY = {
-    "add", "sub", "mul", "div", "pow", "constpow", "fmin", "fmax", "atan2", "copysign", "fmod",
-    "lt", "le", "eq", "ne", "and", "or", "if_else_zero", "hypot",
+    "add",
+    "sub",
+    "mul",
+    "div",
+    "pow",
+    "constpow",
+    "fmin",
+    "fmax",
+    "atan2",
+    "copysign",
+    "fmod",
+    "lt",
+    "le",
+    "eq",
+    "ne",
+    "and",
+    "or",
+    "if_else_zero",
+    "hypot",
 }
 MECHANICAL_PARTS = ("M", "Cp", "F", "Q", "energy", "momentum")
 
@@ -80,17 +121,23 @@ def export_function(name: str, args: list[ca.SX], outputs: list[tuple[str, ca.SX
         sp = fn.sparsity_out(i)
         if any(v is None for v in out_values[i]):
             raise IRExportError(f"{name}: output {oname} has unwritten entries")
-        result.append({
-            "name": oname,
-            "rows": sp.size1(),
-            "cols": sp.size2(),
-            "colind": list(sp.colind()),
-            "row": list(sp.row()),
-            "values": out_values[i],
-        })
+        result.append(
+            {
+                "name": oname,
+                "rows": sp.size1(),
+                "cols": sp.size2(),
+                "colind": list(sp.colind()),
+                "row": list(sp.row()),
+                "values": out_values[i],
+            }
+        )
     n_ops = sum(1 for ins in instructions if ins[1] not in ("input", "const"))
-    return {"n_values": len(instructions), "n_ops": n_ops, "instructions": instructions,
-            "outputs": result}
+    return {
+        "n_values": len(instructions),
+        "n_ops": n_ops,
+        "instructions": instructions,
+        "outputs": result,
+    }
 
 
 def golden_points(model: DerivedModel) -> list[tuple[list[float], list[float]]]:
@@ -126,12 +173,14 @@ def build_ir(model: DerivedModel) -> dict:
     golden = []
     for xv, uv in golden_points(model):
         fv, jv = golden_fn(xv, uv, defaults)
-        golden.append({
-            "x": xv,
-            "u": uv,
-            "f": [float(v) for v in fv.nonzeros()],
-            "jac_x": [float(v) for v in jv.nonzeros()],
-        })
+        golden.append(
+            {
+                "x": xv,
+                "u": uv,
+                "f": [float(v) for v in fv.nonzeros()],
+                "jac_x": [float(v) for v in jv.nonzeros()],
+            }
+        )
     return {
         "format": FORMAT,
         "hash": HASH_PLACEHOLDER,

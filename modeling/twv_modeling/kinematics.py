@@ -49,7 +49,8 @@ class PlanarJoint:
 
     Coordinates (theta, x, y); quasi-velocities (w_z, v_x, v_y): the yaw rate and the velocity of
     the child origin in child components, so that
-    theta_dot = w_z, x_dot = v_x cos(theta) - v_y sin(theta), y_dot = v_x sin(theta) + v_y cos(theta).
+    theta_dot = w_z, x_dot = v_x cos(theta) - v_y sin(theta),
+    y_dot = v_x sin(theta) + v_y cos(theta).
     """
 
     name: str

@@ -141,7 +141,9 @@ class _Kinematics:
             for j in ready:
                 parent = self.joints.get(j.parent)
                 if isinstance(parent, RevoluteJoint) and parent.axisymmetric:
-                    raise ModelError(f"joint {j.name}: a rotor frame ({j.parent}) carries bodies only")
+                    raise ModelError(
+                        f"joint {j.name}: a rotor frame ({j.parent}) carries bodies only"
+                    )
                 ordered.append(j)
                 done.add(j.name)
                 pending.remove(j)
@@ -286,7 +288,9 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
     pf_expr = ca.vertcat(*[full_of_new[s] for s in speed_names])
     Tmat = ca.jacobian(pf_expr, p_new)
     if ca.depends_on(Tmat, ca.vertcat(q_vec, p_new)):
-        raise ModelError("constraints must be linear in the speeds with coordinate-free coefficients")
+        raise ModelError(
+            "constraints must be linear in the speeds with coordinate-free coefficients"
+        )
     Tinv = _inverse_of_speed_change(speed_names, independent, system.constraints, ind_syms, pf)
     gamma_new = _transform_structure(gamma, Tmat, Tinv, n)
 
@@ -379,8 +383,7 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
             "ignorable_coordinates": rotor_coords,
             "speeds": independent,
             "constraints": [
-                {"dependent": c.dependent, "description": c.description}
-                for c in system.constraints
+                {"dependent": c.dependent, "description": c.description} for c in system.constraints
             ],
             "mass_matrix_solve": "symbolic LDL^T in f (structural zeros kept)",
         },

@@ -34,8 +34,9 @@ NO_SIDE_SLIP = Constraint("v_y", lambda s: 0 * s["v_x"], "no side slip: v_y = 0"
 
 
 def _planar(height=0):
-    return PlanarJoint("A", "N", coords=("theta", "x", "y"), speeds=("w_z", "v_x", "v_y"),
-                       height=height)
+    return PlanarJoint(
+        "A", "N", coords=("theta", "x", "y"), speeds=("w_z", "v_x", "v_y"), height=height
+    )
 
 
 def _pendulum_joint():
@@ -43,13 +44,19 @@ def _pendulum_joint():
 
 
 def _pendulum(P):
-    return Body("pendulum", "B", P["m2"], centroid=(0, 0, P["b"]),
-                inertia=(P["I2_xx"], P["I2_yy"], P["I2_zz"]))
+    return Body(
+        "pendulum",
+        "B",
+        P["m2"],
+        centroid=(0, 0, P["b"]),
+        inertia=(P["I2_xx"], P["I2_yy"], P["I2_zz"]),
+    )
 
 
 def _study(P, name, description, constraints):
-    base = Body("base", "A", P["m1"], centroid=(0, 0, P["a"]),
-                inertia=(P["I1_xx"], P["I1_yy"], P["I1_zz"]))
+    base = Body(
+        "base", "A", P["m1"], centroid=(0, 0, P["a"]), inertia=(P["I1_xx"], P["I1_yy"], P["I1_zz"])
+    )
     return MultibodySystem(
         name=name,
         description=description,
@@ -66,16 +73,24 @@ def _study(P, name, description, constraints):
 
 def vehicle8(P):
     """The study's model: 4 coordinates and 4 pseudo speeds, the base free to slide sideways."""
-    return _study(P, "vehicle8",
-                  "The study's vehicle: base (body + person) sliding and yawing in the plane, "
-                  "pendulum bar hinged on the axle; v_y free (no side-slip constraint).", ())
+    return _study(
+        P,
+        "vehicle8",
+        "The study's vehicle: base (body + person) sliding and yawing in the plane, "
+        "pendulum bar hinged on the axle; v_y free (no side-slip constraint).",
+        (),
+    )
 
 
 def vehicle7(P):
     """The rolling vehicle: the same bodies with the no-side-slip constraint v_y = 0."""
-    return _study(P, "vehicle7",
-                  "The study's vehicle with the nonholonomic no-side-slip constraint v_y = 0 "
-                  "(Hamel projection of the unconstrained Lagrangian).", (NO_SIDE_SLIP,))
+    return _study(
+        P,
+        "vehicle7",
+        "The study's vehicle with the nonholonomic no-side-slip constraint v_y = 0 "
+        "(Hamel projection of the unconstrained Lagrangian).",
+        (NO_SIDE_SLIP,),
+    )
 
 
 def segway7(P):
@@ -88,24 +103,32 @@ def segway7(P):
     """
     R, half = P["R"], P["c"] / 2
     wheel_inertia = (P["J_d"], P["J_a"], P["J_d"])
-    speeds = [*SPEEDS, Signal("omega_L", "rad/s", "left wheel spin rate relative to A"),
-              Signal("omega_R", "rad/s", "right wheel spin rate relative to A")]
-    coordinates = [*COORDINATES, Signal("psi_L", "rad", "left wheel angle"),
-                   Signal("psi_R", "rad", "right wheel angle")]
+    speeds = [
+        *SPEEDS,
+        Signal("omega_L", "rad/s", "left wheel spin rate relative to A"),
+        Signal("omega_R", "rad/s", "right wheel spin rate relative to A"),
+    ]
+    coordinates = [
+        *COORDINATES,
+        Signal("psi_L", "rad", "left wheel angle"),
+        Signal("psi_R", "rad", "right wheel angle"),
+    ]
     return MultibodySystem(
         name="segway7",
         description="Segway: base = the two rolling wheels (spin inertia included), pendulum = "
-                    "chassis + rider; wheel torques (tau_L, tau_R) react on the pendulum.",
+        "chassis + rider; wheel torques (tau_L, tau_R) react on the pendulum.",
         params=VEHICLE_PARAMS,
         coordinates=coordinates,
         speeds=speeds,
         joints=[
             _planar(height=R),
             _pendulum_joint(),
-            RevoluteJoint("wheel_L", "A", "psi_L", "omega_L", axis="y", at=(0, half, 0),
-                          axisymmetric=True),
-            RevoluteJoint("wheel_R", "A", "psi_R", "omega_R", axis="y", at=(0, -half, 0),
-                          axisymmetric=True),
+            RevoluteJoint(
+                "wheel_L", "A", "psi_L", "omega_L", axis="y", at=(0, half, 0), axisymmetric=True
+            ),
+            RevoluteJoint(
+                "wheel_R", "A", "psi_R", "omega_R", axis="y", at=(0, -half, 0), axisymmetric=True
+            ),
         ],
         bodies=[
             _pendulum(P),
@@ -122,10 +145,16 @@ def segway7(P):
         ],
         constraints=(
             NO_SIDE_SLIP,
-            Constraint("omega_L", lambda s: (s["v_x"] - half * s["w_z"]) / R,
-                       "left wheel rolls without slip"),
-            Constraint("omega_R", lambda s: (s["v_x"] + half * s["w_z"]) / R,
-                       "right wheel rolls without slip"),
+            Constraint(
+                "omega_L",
+                lambda s: (s["v_x"] - half * s["w_z"]) / R,
+                "left wheel rolls without slip",
+            ),
+            Constraint(
+                "omega_R",
+                lambda s: (s["v_x"] + half * s["w_z"]) / R,
+                "right wheel rolls without slip",
+            ),
         ),
     )
 
