@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Every test of twv, from a fresh clone: Python modeling (ruff, pytest, IR freshness), then Rust
+# (fmt, clippy, tests). Installs what it needs itself (.venv/ with pinned versions).
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+step() { printf '\n== %s\n' "$*"; }
+
+step "python environment (.venv, pinned)"
+bash .ci/setup-python.sh
+py=.venv/bin/python
+
+step "ruff"
+.venv/bin/ruff check modeling
+.venv/bin/ruff format --check modeling
+
+step "pytest modeling/"
+"$py" -m pytest -q modeling/tests
+
+step "IR freshness (generated/ir is what the modeling code derives today)"
+"$py" -m twv_modeling check
+
+step "cargo fmt --check"
+cargo fmt --all --check
+
+step "cargo clippy --all-targets -- -D warnings"
+cargo clippy --workspace --all-targets -- -D warnings
+
+step "cargo test"
+cargo test --workspace
