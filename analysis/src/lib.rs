@@ -4,3 +4,4 @@
 pub mod hand_model;
 pub mod integrate;
 pub mod lyapunov;
+pub mod output;

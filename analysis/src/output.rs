@@ -1,0 +1,117 @@
+//! Result files written atomically: each file goes to a temporary name in its folder and is
+//! renamed into place, and a run that fails removes what it had already written, so a user never
+//! finds partial or corrupt output.
+
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Why an output could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// The output folder cannot be created or written.
+    #[error("cannot write to {path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// A folder receiving the files of one run.
+///
+/// Files are only kept when [`OutputDir::commit`] is called; dropping an uncommitted
+/// `OutputDir` (an error part-way) deletes the files it wrote and the folder if it created it.
+#[derive(Debug)]
+pub struct OutputDir {
+    dir: PathBuf,
+    created: bool,
+    written: Vec<PathBuf>,
+    committed: bool,
+}
+
+impl OutputDir {
+    /// Create (if needed) and check the folder by writing a probe file.
+    pub fn create(dir: &Path) -> Result<Self, OutputError> {
+        let io = |source| OutputError::Io { path: dir.to_path_buf(), source };
+        let created = !dir.exists();
+        fs::create_dir_all(dir).map_err(io)?;
+        let probe = dir.join(".twv-write-probe");
+        fs::write(&probe, b"").map_err(io)?;
+        fs::remove_file(&probe).map_err(io)?;
+        Ok(Self { dir: dir.to_path_buf(), created, written: Vec::new(), committed: false })
+    }
+
+    /// The folder's path.
+    pub fn path(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Write `name` atomically (temporary file + rename) and remember it.
+    pub fn write(&mut self, name: &str, bytes: &[u8]) -> Result<PathBuf, OutputError> {
+        let path = self.dir.join(name);
+        write_atomic(&path, bytes)?;
+        self.written.push(path.clone());
+        Ok(path)
+    }
+
+    /// Keep the written files.
+    pub fn commit(mut self) -> Vec<PathBuf> {
+        self.committed = true;
+        std::mem::take(&mut self.written)
+    }
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        if self.committed {
+            return;
+        }
+        for path in &self.written {
+            let _ = fs::remove_file(path);
+        }
+        if self.created {
+            let _ = fs::remove_dir(&self.dir);
+        }
+    }
+}
+
+/// Write a file via a temporary sibling and a rename, so readers never see half a file.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let io = |source| OutputError::Io { path: path.to_path_buf(), source };
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
+    let result = (|| {
+        let mut file = fs::File::create(&tmp)?;
+        file.write_all(bytes)?;
+        file.sync_all()?;
+        fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result.map_err(io)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uncommitted_output_is_removed() {
+        let base = std::env::temp_dir().join(format!("twv-output-test-{}", std::process::id()));
+        let dir = base.join("run");
+        {
+            let mut out = OutputDir::create(&dir).unwrap();
+            out.write("a.csv", b"1,2\n").unwrap();
+            assert!(dir.join("a.csv").exists());
+        }
+        assert!(!dir.exists(), "a failed run leaves nothing behind");
+        let mut out = OutputDir::create(&dir).unwrap();
+        out.write("b.json", b"{}").unwrap();
+        let kept = out.commit();
+        assert_eq!(fs::read(&kept[0]).unwrap(), b"{}");
+        fs::remove_dir_all(&base).unwrap();
+    }
+}
