@@ -6,29 +6,29 @@
 /// value.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VehicleParams {
-    /// Base mass (body + rider) [kg]; vehicle8/vehicle7 only.
+    /// Base mass (body + rider) (kg); vehicle8/vehicle7 only.
     pub m1: f64,
-    /// Pendulum mass [kg].
+    /// Pendulum mass (kg).
     pub m2: f64,
-    /// Gravity [m/s²].
+    /// Gravity (m/s²).
     pub g: f64,
-    /// Base centroid height above the hinge [m]; enters only the potential energy constant.
+    /// Base centroid height above the hinge (m); enters only the potential energy constant.
     pub a: f64,
-    /// Pendulum centroid distance from the hinge (l) [m].
+    /// Pendulum centroid distance from the hinge (l) (m).
     pub b: f64,
-    /// Track width [m]; segway7 only (wheel positions).
+    /// Track width (m); segway7 only (wheel positions).
     pub c: f64,
-    /// Base inertia about its centroid [kg m²]; only `i1[2]` (Izz) enters.
+    /// Base inertia about its centroid (kg m²); only `i1[2]` (Izz) enters.
     pub i1: [f64; 3],
-    /// Pendulum inertia about its centroid [kg m²].
+    /// Pendulum inertia about its centroid (kg m²).
     pub i2: [f64; 3],
-    /// Wheel radius [m]; segway7 only.
+    /// Wheel radius (m); segway7 only.
     pub r: f64,
-    /// Mass of one wheel [kg]; segway7 only.
+    /// Mass of one wheel (kg); segway7 only.
     pub m_w: f64,
-    /// Axial inertia of one wheel [kg m²]; segway7 only.
+    /// Axial inertia of one wheel (kg m²); segway7 only.
     pub j_a: f64,
-    /// Diametral inertia of one wheel [kg m²]; segway7 only.
+    /// Diametral inertia of one wheel (kg m²); segway7 only.
     pub j_d: f64,
 }
 
