@@ -1,1 +1,129 @@
-//! (being written)
+//! Every shipped twv model, generated at compile time from `generated/ir/*.json` by the
+//! `twv_model!` proc-macro (one emitter: twv-emit).
+//!
+//! - Runtime parameters: [`Vehicle8`], [`Vehicle7`], [`Segway7`], [`Lorenz`], [`HenonHeiles`]
+//!   (`new(values)`, `with_defaults()`, consts `NX`, `NU`, `NP`, `NS`, `PARAMS`, `DEFAULTS`).
+//! - Parameters folded as constants: [`baked`] (the vehicles from `vehicles/paper.toml`,
+//!   `segway7` from `vehicles/segway.toml`, the explicit models from their IR defaults). Editing
+//!   one of those TOML files (or an IR file) and running `cargo build` rebuilds this crate with
+//!   the new constants: the macro `include_bytes!`es every file it reads.
+//! - The IR text of each model ([`ir_json`], [`MODELS`]) so a binary can embed it.
+//! - [`visit`]: dispatch a model name to its concrete type without trait objects.
+
+use twv_model::Model;
+
+twv_macros::twv_model!(ir = "ir/vehicle8.json", name = Vehicle8);
+twv_macros::twv_model!(ir = "ir/vehicle7.json", name = Vehicle7);
+twv_macros::twv_model!(ir = "ir/segway7.json", name = Segway7);
+twv_macros::twv_model!(ir = "ir/lorenz.json", name = Lorenz);
+twv_macros::twv_model!(ir = "ir/henon_heiles.json", name = HenonHeiles);
+
+/// The shipped models with their parameters folded as compile-time constants.
+pub mod baked {
+    twv_macros::twv_model!(
+        ir = "ir/vehicle8.json",
+        name = Vehicle8,
+        bake = "../vehicles/paper.toml"
+    );
+    twv_macros::twv_model!(
+        ir = "ir/vehicle7.json",
+        name = Vehicle7,
+        bake = "../vehicles/paper.toml"
+    );
+    twv_macros::twv_model!(
+        ir = "ir/segway7.json",
+        name = Segway7,
+        bake = "../vehicles/segway.toml"
+    );
+    twv_macros::twv_model!(ir = "ir/lorenz.json", name = Lorenz, bake = defaults);
+    twv_macros::twv_model!(
+        ir = "ir/henon_heiles.json",
+        name = HenonHeiles,
+        bake = defaults
+    );
+}
+
+/// (model name, IR file text) of every shipped model, in the order of the DESIGN's table.
+pub const MODELS: [(&str, &str); 5] = [
+    ("vehicle8", include_str!("../ir/vehicle8.json")),
+    ("vehicle7", include_str!("../ir/vehicle7.json")),
+    ("segway7", include_str!("../ir/segway7.json")),
+    ("lorenz", include_str!("../ir/lorenz.json")),
+    ("henon_heiles", include_str!("../ir/henon_heiles.json")),
+];
+
+/// The IR text of a shipped model.
+pub fn ir_json(name: &str) -> Option<&'static str> {
+    MODELS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, text)| *text)
+}
+
+/// Something to do with a model whose sizes are only known once a name is resolved.
+/// [`visit`] calls `visit` with the concrete model type, so the work is monomorphised and
+/// inlined exactly as if the caller had named the type.
+pub trait Visitor {
+    /// What the visit returns.
+    type Output;
+    /// Do the work with a concrete model.
+    fn visit<const NX: usize, const NU: usize, M: Model<NX, NU>>(self, model: M) -> Self::Output;
+}
+
+/// A name that is not a shipped model, or parameter values of the wrong count.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum VisitError {
+    /// Not a shipped model; the known names are in [`MODELS`].
+    UnknownModel(String),
+    /// `params` has `given` values, the model has `expected`.
+    ParamCount { expected: usize, given: usize },
+}
+
+impl core::fmt::Display for VisitError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            VisitError::UnknownModel(name) => {
+                let known: Vec<&str> = MODELS.iter().map(|(n, _)| *n).collect();
+                write!(f, "unknown model `{name}` (known: {})", known.join(", "))
+            }
+            VisitError::ParamCount { expected, given } => {
+                write!(
+                    f,
+                    "{given} parameter values given, the model has {expected}"
+                )
+            }
+        }
+    }
+}
+
+impl std::error::Error for VisitError {}
+
+fn values<const NP: usize>(
+    params: Option<&[f64]>,
+    defaults: [f64; NP],
+) -> Result<[f64; NP], VisitError> {
+    match params {
+        None => Ok(defaults),
+        Some(p) => p.try_into().map_err(|_| VisitError::ParamCount {
+            expected: NP,
+            given: p.len(),
+        }),
+    }
+}
+
+/// Run `visitor` on the runtime-parameter model called `name`, with `params` (IR order; validate
+/// them first, e.g. with `twv_ir::load_params`) or the IR defaults.
+pub fn visit<V: Visitor>(
+    name: &str,
+    params: Option<&[f64]>,
+    visitor: V,
+) -> Result<V::Output, VisitError> {
+    Ok(match name {
+        "vehicle8" => visitor.visit(Vehicle8::new(values(params, Vehicle8::DEFAULTS)?)),
+        "vehicle7" => visitor.visit(Vehicle7::new(values(params, Vehicle7::DEFAULTS)?)),
+        "segway7" => visitor.visit(Segway7::new(values(params, Segway7::DEFAULTS)?)),
+        "lorenz" => visitor.visit(Lorenz::new(values(params, Lorenz::DEFAULTS)?)),
+        "henon_heiles" => visitor.visit(HenonHeiles::new(values(params, HenonHeiles::DEFAULTS)?)),
+        other => return Err(VisitError::UnknownModel(other.to_string())),
+    })
+}

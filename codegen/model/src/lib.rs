@@ -28,6 +28,28 @@ pub struct ModelInfo {
     pub params: &'static [&'static str],
 }
 
+/// Metadata of one scalar parameter, as declared in the model IR (`params`), so that code
+/// holding only a generated model can still say what each entry of its parameter vector means.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ParamInfo {
+    /// Parameter name (`I2_xx`).
+    pub name: &'static str,
+    /// TOML key its value is read from (`I2`).
+    pub key: &'static str,
+    /// Component of the TOML array, or `None` for a scalar key.
+    pub index: Option<usize>,
+    /// SI unit.
+    pub unit: &'static str,
+    /// Validation kind: `mass`, `inertia`, `gravity`, `length` or `other`.
+    pub kind: &'static str,
+    /// Value used for the IR's golden values.
+    pub default: f64,
+    /// False when the model's equations do not contain the parameter.
+    pub used: bool,
+    /// One line of description.
+    pub description: &'static str,
+}
+
 /// A model ẋ = f(x, u) with its Jacobians.
 pub trait Model<const NX: usize, const NU: usize> {
     /// Names of the model, its states, inputs and parameters.

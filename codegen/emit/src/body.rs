@@ -1,0 +1,175 @@
+//! Straight-line function bodies: one `let` per IR instruction, and the expressions that read
+//! its outputs.
+
+use proc_macro2::{Ident, Literal, TokenStream};
+use quote::{format_ident, quote};
+use twv_ir::{Arg, BinaryOp, Function, Instr, Output, UnaryOp};
+
+use crate::Params;
+
+/// The local holding value `k`.
+pub fn value(k: usize) -> Ident {
+    format_ident!("v{}", k)
+}
+
+/// An exact `f64` literal (shortest round-trip digits); non-finite values as named constants.
+pub fn float(v: f64) -> TokenStream {
+    if v.is_nan() {
+        return quote!(f64::NAN);
+    }
+    let magnitude = if v.is_infinite() {
+        quote!(f64::INFINITY)
+    } else {
+        let lit = Literal::f64_suffixed(v.abs());
+        quote!(#lit)
+    };
+    if v.is_sign_negative() {
+        quote!(-#magnitude)
+    } else {
+        magnitude
+    }
+}
+
+/// A `usize` literal.
+pub fn index(i: usize) -> Literal {
+    Literal::usize_unsuffixed(i)
+}
+
+/// The `let` statements of `f`. Parameters come from `self.params` or are folded as constants.
+pub fn lets(f: &Function, params: &Params) -> TokenStream {
+    let lets = f.instructions().iter().enumerate().map(|(k, instr)| {
+        let v = value(k);
+        let rhs = match *instr {
+            Instr::Input { arg, index: i } => input(arg, i, params),
+            Instr::Const(c) => float(c),
+            Instr::Unary(op, a) => unary(op, &value(a)),
+            Instr::Binary(op, a, b) => binary(op, &value(a), &value(b)),
+        };
+        quote!(let #v: f64 = #rhs;)
+    });
+    quote!(#(#lets)*)
+}
+
+fn input(arg: Arg, i: usize, params: &Params) -> TokenStream {
+    let idx = index(i);
+    match (arg, params) {
+        (Arg::X, _) => quote!(x[#idx]),
+        (Arg::U, _) => quote!(u[#idx]),
+        (Arg::P, Params::Runtime) => quote!(self.params[#idx]),
+        (Arg::P, Params::Baked { values, .. }) => float(values.get(i).copied().unwrap_or(f64::NAN)),
+    }
+}
+
+/// One arm per unary operation, no catch-all: a new operation fails to build until handled.
+/// Each expression is the one in `twv_ir::ops` (CasADi's C semantics).
+fn unary(op: UnaryOp, a: &Ident) -> TokenStream {
+    match op {
+        UnaryOp::Neg => quote!(-#a),
+        UnaryOp::Exp => quote!(#a.exp()),
+        UnaryOp::Log => quote!(#a.ln()),
+        UnaryOp::Sqrt => quote!(#a.sqrt()),
+        UnaryOp::Sq => quote!(#a * #a),
+        UnaryOp::Twice => quote!(2.0 * #a),
+        UnaryOp::Sin => quote!(#a.sin()),
+        UnaryOp::Cos => quote!(#a.cos()),
+        UnaryOp::Tan => quote!(#a.tan()),
+        UnaryOp::Asin => quote!(#a.asin()),
+        UnaryOp::Acos => quote!(#a.acos()),
+        UnaryOp::Atan => quote!(#a.atan()),
+        UnaryOp::Fabs => quote!(#a.abs()),
+        UnaryOp::Sign => {
+            quote!(if #a < 0.0 { -1.0 } else if #a > 0.0 { 1.0 } else { #a })
+        }
+        UnaryOp::Inv => quote!(1.0 / #a),
+        UnaryOp::Sinh => quote!(#a.sinh()),
+        UnaryOp::Cosh => quote!(#a.cosh()),
+        UnaryOp::Tanh => quote!(#a.tanh()),
+        UnaryOp::Asinh => libm(quote!(asinh), a),
+        UnaryOp::Acosh => libm(quote!(acosh), a),
+        UnaryOp::Atanh => libm(quote!(atanh), a),
+        UnaryOp::Floor => quote!(#a.floor()),
+        UnaryOp::Ceil => quote!(#a.ceil()),
+        UnaryOp::Erf => libm(quote!(erf), a),
+        UnaryOp::Not => quote!(if #a == 0.0 { 1.0 } else { 0.0 }),
+        UnaryOp::Log1p => quote!(#a.ln_1p()),
+        UnaryOp::Expm1 => quote!(#a.exp_m1()),
+    }
+}
+
+/// A C library function `std` does not call (see `twv_ir::ops`).
+fn libm(function: TokenStream, a: &Ident) -> TokenStream {
+    quote!({
+        unsafe extern "C" {
+            fn #function(x: f64) -> f64;
+        }
+        // SAFETY: a pure C library function of one double, defined for every input.
+        unsafe { #function(#a) }
+    })
+}
+
+/// One arm per binary operation, no catch-all.
+fn binary(op: BinaryOp, a: &Ident, b: &Ident) -> TokenStream {
+    let truth = |cond: TokenStream| quote!(if #cond { 1.0 } else { 0.0 });
+    match op {
+        BinaryOp::Add => quote!(#a + #b),
+        BinaryOp::Sub => quote!(#a - #b),
+        BinaryOp::Mul => quote!(#a * #b),
+        BinaryOp::Div => quote!(#a / #b),
+        BinaryOp::Pow => quote!(#a.powf(#b)),
+        BinaryOp::Constpow => quote!(#a.powf(#b)),
+        BinaryOp::Fmin => quote!(#a.min(#b)),
+        BinaryOp::Fmax => quote!(#a.max(#b)),
+        BinaryOp::Atan2 => quote!(#a.atan2(#b)),
+        BinaryOp::Copysign => quote!(#a.copysign(#b)),
+        BinaryOp::Fmod => quote!(#a % #b),
+        BinaryOp::Lt => truth(quote!(#a < #b)),
+        BinaryOp::Le => truth(quote!(#a <= #b)),
+        BinaryOp::Eq => truth(quote!(#a == #b)),
+        BinaryOp::Ne => truth(quote!(#a != #b)),
+        BinaryOp::And => truth(quote!(#a != 0.0 && #b != 0.0)),
+        BinaryOp::Or => truth(quote!(#a != 0.0 || #b != 0.0)),
+        BinaryOp::IfElseZero => quote!(if #a != 0.0 { #b } else { 0.0 }),
+        BinaryOp::Hypot => quote!(#a.hypot(#b)),
+    }
+}
+
+/// The dense matrix of an output as rows of expressions (`vK` or `0.0`).
+pub fn dense(o: &Output) -> Vec<Vec<TokenStream>> {
+    let mut grid = vec![vec![quote!(0.0); o.cols]; o.rows];
+    for (r, c, v) in o.entries() {
+        let v = value(v);
+        grid[r][c] = quote!(#v);
+    }
+    grid
+}
+
+/// `[e0, e1, ...]` of a column-vector output.
+pub fn vector_expr(o: &Output) -> TokenStream {
+    let items = dense(o).into_iter().map(|row| quote!(#(#row),*));
+    quote!([#(#items),*])
+}
+
+/// `[[...], ...]` (row-major) of a matrix output.
+pub fn matrix_expr(o: &Output) -> TokenStream {
+    let rows = dense(o).into_iter().map(|row| quote!([#(#row),*]));
+    quote!([#(#rows),*])
+}
+
+/// For each row of ∂f/∂x, `(∂f/∂x)_row · wk` over the stored entries, summed left to right in
+/// increasing column order (the interpreter's order), or `0.0` for an empty row.
+pub fn jw_rows(jac: &Output) -> Vec<TokenStream> {
+    let mut rows: Vec<Vec<TokenStream>> = vec![Vec::new(); jac.rows];
+    for (r, c, v) in jac.entries() {
+        let (v, c) = (value(v), index(c));
+        rows[r].push(quote!(#v * wk[#c]));
+    }
+    rows.into_iter()
+        .map(|terms| {
+            if terms.is_empty() {
+                quote!(0.0)
+            } else {
+                quote!(#(#terms)+*)
+            }
+        })
+        .collect()
+}

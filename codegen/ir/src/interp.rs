@@ -1,0 +1,358 @@
+//! The IR interpreter: evaluates any function of a validated IR with the same operations in the
+//! same order as the generated code, so results are bit-identical; it is both the reference the
+//! generated code is tested against and the way to analyse a user's IR file without recompiling.
+
+use std::cell::RefCell;
+use std::ops::Range;
+use std::sync::Arc;
+
+use twv_model::{Mechanical, Model, ModelInfo};
+
+use crate::error::{ModelError, WorkTooShort};
+use crate::params::check_values;
+use crate::types::{Function, Instr, Ir, Output};
+
+impl Function {
+    /// Evaluate every instruction at (x, u, p) into `work[..n_values]`. Inputs outside the given
+    /// slices read as NaN (never a panic); the outputs are then `work[output.values[e]]`.
+    pub fn eval(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        p: &[f64],
+        work: &mut [f64],
+    ) -> Result<(), WorkTooShort> {
+        let (needed, given) = (self.n_values(), work.len());
+        if given < needed {
+            return Err(WorkTooShort { needed, given });
+        }
+        let args = [x, u, p];
+        for (k, instr) in self.instructions.iter().enumerate() {
+            work[k] = match *instr {
+                Instr::Input { arg, index } => {
+                    args[arg.number()].get(index).copied().unwrap_or(f64::NAN)
+                }
+                Instr::Const(c) => c,
+                Instr::Unary(op, a) => op.apply(work[a]),
+                Instr::Binary(op, a, b) => op.apply(work[a], work[b]),
+            };
+        }
+        Ok(())
+    }
+}
+
+/// What every interpreted model of one IR shares: the IR, its names as `'static` strings (leaked
+/// once per IR, because [`ModelInfo`] holds `&'static str`) and the row-wise order of ∂f/∂x
+/// that the sparse J·W product sums in.
+#[derive(Debug)]
+struct Program {
+    ir: Ir,
+    info: ModelInfo,
+    /// Per row of ∂f/∂x, its entries in `jw_entries`.
+    jw_rows: Vec<Range<usize>>,
+    /// (column, value id in `f_jac_x`) of each stored entry, row by row, columns increasing.
+    jw_entries: Vec<(usize, usize)>,
+    work_len: usize,
+}
+
+fn leak(s: &str) -> &'static str {
+    Box::leak(s.to_string().into_boxed_str())
+}
+
+fn leak_names<'a>(names: impl Iterator<Item = &'a String>) -> &'static [&'static str] {
+    Box::leak(
+        names
+            .map(|n| leak(n))
+            .collect::<Vec<_>>()
+            .into_boxed_slice(),
+    )
+}
+
+impl Program {
+    fn new(ir: &Ir) -> Self {
+        let info = ModelInfo {
+            name: leak(ir.model()),
+            ir_hash: leak(ir.hash()),
+            states: leak_names(ir.states().iter().map(|s| &s.name)),
+            inputs: leak_names(ir.inputs().iter().map(|s| &s.name)),
+            params: leak_names(ir.params().iter().map(|p| &p.name)),
+        };
+        let mut by_row: Vec<Vec<(usize, usize)>> = vec![Vec::new(); ir.nx()];
+        if let Some(jac) = ir.output("f_jac_x", "jac_x") {
+            for (r, c, v) in jac.entries() {
+                by_row[r].push((c, v));
+            }
+        }
+        let mut jw_rows = Vec::with_capacity(ir.nx());
+        let mut jw_entries = Vec::new();
+        for row in by_row {
+            let start = jw_entries.len();
+            jw_entries.extend(row);
+            jw_rows.push(start..jw_entries.len());
+        }
+        let work_len = ir
+            .functions()
+            .values()
+            .map(Function::n_values)
+            .max()
+            .unwrap_or(0);
+        Program {
+            ir: ir.clone(),
+            info,
+            jw_rows,
+            jw_entries,
+            work_len,
+        }
+    }
+}
+
+/// A model evaluated by interpreting its IR: implements [`Model`] (and [`Mechanical`] for
+/// multibody models) with the same numbers as the generated code.
+///
+/// Evaluations use one preallocated work vector behind a `RefCell`, so a value is `Send` but not
+/// `Sync`: give each thread its own clone. No method allocates after construction.
+#[derive(Debug, Clone)]
+pub struct Interpreted<const NX: usize, const NU: usize> {
+    program: Arc<Program>,
+    params: Vec<f64>,
+    work: RefCell<Vec<f64>>,
+}
+
+impl<const NX: usize, const NU: usize> Interpreted<NX, NU> {
+    /// A model of `ir` with parameter values `params` (validated like a parameter file's).
+    pub fn new(ir: &Ir, params: &[f64]) -> Result<Self, ModelError> {
+        let size = |what, found, expected| {
+            if found == expected {
+                Ok(())
+            } else {
+                Err(ModelError::Size {
+                    file: ir.file().to_string(),
+                    what,
+                    found,
+                    expected,
+                })
+            }
+        };
+        size("states", ir.nx(), NX)?;
+        size("inputs", ir.nu(), NU)?;
+        let program = Arc::new(Program::new(ir));
+        Self::from_program(program, params)
+    }
+
+    /// A model of `ir` with every parameter at its IR default.
+    pub fn with_defaults(ir: &Ir) -> Result<Self, ModelError> {
+        Self::new(ir, &ir.defaults())
+    }
+
+    /// The same model with other parameter values (shares the IR and its names).
+    pub fn with_params(&self, params: &[f64]) -> Result<Self, ModelError> {
+        Self::from_program(self.program.clone(), params)
+    }
+
+    fn from_program(program: Arc<Program>, params: &[f64]) -> Result<Self, ModelError> {
+        check_values(params, program.ir.file(), program.ir.params())?;
+        let work = RefCell::new(vec![0.0; program.work_len]);
+        Ok(Interpreted {
+            program,
+            params: params.to_vec(),
+            work,
+        })
+    }
+
+    /// The IR this model interprets.
+    pub fn ir(&self) -> &Ir {
+        &self.program.ir
+    }
+
+    /// The parameter values, in IR order.
+    pub fn params(&self) -> &[f64] {
+        &self.params
+    }
+
+    /// Number of quasi-velocities (the `NS` of [`Mechanical`]), 0 for explicit models.
+    pub fn ns(&self) -> usize {
+        self.program.ir.ns()
+    }
+
+    /// Evaluate `function` at (x, u) and pass its outputs and values to `read`. Returns false
+    /// (and does not call `read`) when the function does not exist; the work vector is always
+    /// long enough and never borrowed twice, so nothing else can fail.
+    fn run(
+        &self,
+        function: &str,
+        x: &[f64],
+        u: &[f64],
+        read: impl FnOnce(&Function, &[f64]),
+    ) -> bool {
+        let Some(f) = self.program.ir.function(function) else {
+            return false;
+        };
+        let Ok(mut work) = self.work.try_borrow_mut() else {
+            return false;
+        };
+        if f.eval(x, u, &self.params, &mut work).is_err() {
+            return false;
+        }
+        read(f, &work);
+        true
+    }
+
+    /// Evaluate output `output` of `function` as a dense `rows`×`cols` matrix through `set(r, c, v)`
+    /// after `clear()`; false if the function is missing or has another shape.
+    fn dense(
+        &self,
+        (function, output): (&str, &str),
+        (x, u): (&[f64], &[f64]),
+        (rows, cols): (usize, usize),
+        mut set: impl FnMut(usize, usize, f64),
+    ) -> bool {
+        let mut found = false;
+        let ran = self.run(function, x, u, |f, w| {
+            let Some(o) = f
+                .output(output)
+                .filter(|o| (o.rows, o.cols) == (rows, cols))
+            else {
+                return;
+            };
+            found = true;
+            for r in 0..rows {
+                for c in 0..cols {
+                    set(r, c, 0.0);
+                }
+            }
+            for (r, c, v) in o.entries() {
+                set(r, c, w[v]);
+            }
+        });
+        ran && found
+    }
+
+    fn vector<const R: usize>(&self, function: &str, x: &[f64], u: &[f64], out: &mut [f64; R]) {
+        if !self.dense((function, function), (x, u), (R, 1), |r, _, v| out[r] = v) {
+            out.fill(f64::NAN);
+        }
+    }
+
+    fn matrix<const R: usize, const C: usize>(
+        &self,
+        function: &str,
+        x: &[f64],
+        u: &[f64],
+        out: &mut [[f64; C]; R],
+    ) {
+        if !self.dense((function, function), (x, u), (R, C), |r, c, v| {
+            out[r][c] = v
+        }) {
+            out.iter_mut().for_each(|row| row.fill(f64::NAN));
+        }
+    }
+
+    fn jac_output(&self) -> Option<&Output> {
+        self.program.ir.jac_x_sparsity()
+    }
+}
+
+impl<const NX: usize, const NU: usize> Model<NX, NU> for Interpreted<NX, NU> {
+    fn info(&self) -> ModelInfo {
+        self.program.info
+    }
+
+    fn f(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [f64; NX]) {
+        self.vector("f", x, u, out);
+    }
+
+    fn jac_x(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NX]; NX]) {
+        self.matrix("jac_x", x, u, out);
+    }
+
+    fn jac_u(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NU]; NX]) {
+        self.matrix("jac_u", x, u, out);
+    }
+
+    fn jac_x_colind(&self) -> &[usize] {
+        self.jac_output().map_or(&[], |o| &o.colind)
+    }
+
+    fn jac_x_row(&self) -> &[usize] {
+        self.jac_output().map_or(&[], |o| &o.row)
+    }
+
+    fn jac_x_sparse(&self, x: &[f64; NX], u: &[f64; NU], values: &mut [f64]) {
+        let ran = self.run("jac_x", x, u, |f, w| {
+            let ids = f.output("jac_x").map_or(&[][..], |o| &o.values);
+            for (slot, &id) in values.iter_mut().zip(ids) {
+                *slot = w[id];
+            }
+        });
+        if !ran {
+            values.fill(f64::NAN);
+        }
+    }
+
+    fn f_jw<const K: usize>(
+        &self,
+        x: &[f64; NX],
+        u: &[f64; NU],
+        w: &[[f64; NX]; K],
+        f: &mut [f64; NX],
+        out: &mut [[f64; NX]; K],
+    ) {
+        let p = &*self.program;
+        let ran = self.run("f_jac_x", x, u, |func, vals| {
+            f.fill(0.0);
+            if let Some(o) = func.output("f") {
+                o.entries().for_each(|(r, _, v)| f[r] = vals[v]);
+            }
+            for (wk, ok) in w.iter().zip(out.iter_mut()) {
+                for (slot, range) in ok.iter_mut().zip(&p.jw_rows) {
+                    // The generated code's order: first term, then left to right.
+                    let mut terms = p.jw_entries[range.clone()]
+                        .iter()
+                        .map(|&(c, v)| vals[v] * wk[c]);
+                    *slot = terms
+                        .next()
+                        .map_or(0.0, |first| terms.fold(first, |acc, t| acc + t));
+                }
+            }
+        });
+        if !ran {
+            f.fill(f64::NAN);
+            out.iter_mut().for_each(|row| row.fill(f64::NAN));
+        }
+    }
+}
+
+/// The mechanical parts are evaluated with u = 0 except `Q` (as in the generated code). An `NS` other than the IR's number
+/// of speeds, or an explicit model, gives NaN outputs (the trait has no error channel; check
+/// [`Interpreted::ns`] first).
+impl<const NX: usize, const NU: usize, const NS: usize> Mechanical<NX, NU, NS>
+    for Interpreted<NX, NU>
+{
+    fn mass_matrix(&self, x: &[f64; NX], out: &mut [[f64; NS]; NS]) {
+        self.matrix("M", x, &[0.0; NU], out);
+    }
+
+    fn cp(&self, x: &[f64; NX], out: &mut [f64; NS]) {
+        self.vector("Cp", x, &[0.0; NU], out);
+    }
+
+    fn gravity(&self, x: &[f64; NX], out: &mut [f64; NS]) {
+        self.vector("F", x, &[0.0; NU], out);
+    }
+
+    fn input_forces(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [f64; NS]) {
+        self.vector("Q", x, u, out);
+    }
+
+    fn energy(&self, x: &[f64; NX]) -> f64 {
+        let mut out = [0.0; 1];
+        self.vector("energy", x, &[0.0; NU], &mut out);
+        out[0]
+    }
+
+    fn momentum(&self, x: &[f64; NX]) -> [f64; 3] {
+        let mut out = [0.0; 3];
+        self.vector("momentum", x, &[0.0; NU], &mut out);
+        out
+    }
+}

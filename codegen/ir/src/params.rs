@@ -1,0 +1,150 @@
+//! Parameter files: a TOML table read into values in the IR's parameter order, using each
+//! parameter's `key` and `index`, and validated by its `kind` (see generated/ir/README.md).
+
+use std::path::Path;
+
+use toml::{Table, Value};
+
+use crate::error::{ParamError, ParamProblem};
+use crate::types::{Param, ParamKind};
+
+/// Read the TOML file at `path` into values in the order of `params`.
+pub fn load_params(path: impl AsRef<Path>, params: &[Param]) -> Result<Vec<f64>, ParamError> {
+    let path = path.as_ref();
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| ParamError {
+        file: file.clone(),
+        problem: ParamProblem::Io(e.to_string()),
+    })?;
+    parse_params(&text, &file, params)
+}
+
+/// Parse TOML text into values in the order of `params`; `file` is the name used in errors.
+pub fn parse_params(text: &str, file: &str, params: &[Param]) -> Result<Vec<f64>, ParamError> {
+    parse_inner(text, params).map_err(|problem| ParamError {
+        file: file.to_string(),
+        problem,
+    })
+}
+
+/// Check values given directly (not from a file) the way a file's values are checked.
+pub fn check_values(values: &[f64], file: &str, params: &[Param]) -> Result<(), ParamError> {
+    check_all(values, params).map_err(|problem| ParamError {
+        file: file.to_string(),
+        problem,
+    })
+}
+
+fn parse_inner(text: &str, params: &[Param]) -> Result<Vec<f64>, ParamProblem> {
+    let table: Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| ParamProblem::Syntax(e.to_string().trim().to_string()))?;
+    if let Some(key) = table.keys().find(|k| !params.iter().any(|p| &p.key == *k)) {
+        return Err(ParamProblem::UnknownKey(key.clone()));
+    }
+    let values = params
+        .iter()
+        .map(|p| value_of(&table, p, params))
+        .collect::<Result<Vec<_>, _>>()?;
+    check_all(&values, params)?;
+    Ok(values)
+}
+
+fn value_of(table: &Table, p: &Param, params: &[Param]) -> Result<f64, ParamProblem> {
+    let raw = table.get(&p.key).ok_or_else(|| ParamProblem::MissingKey {
+        key: p.key.clone(),
+        description: p.description.clone(),
+    })?;
+    let Some(index) = p.index else {
+        return number(raw, &p.key);
+    };
+    let len = params.iter().filter(|q| q.key == p.key).count();
+    match raw {
+        Value::Array(items) if items.len() == len => number(&items[index], &p.name),
+        other => Err(ParamProblem::WrongType {
+            field: p.key.clone(),
+            expected: format!("an array of {len} numbers"),
+            value: describe(other),
+        }),
+    }
+}
+
+fn number(v: &Value, field: &str) -> Result<f64, ParamProblem> {
+    match v {
+        Value::Float(x) => Ok(*x),
+        Value::Integer(i) => Ok(*i as f64),
+        other => Err(ParamProblem::WrongType {
+            field: field.to_string(),
+            expected: "a number".into(),
+            value: describe(other),
+        }),
+    }
+}
+
+fn check_all(values: &[f64], params: &[Param]) -> Result<(), ParamProblem> {
+    if values.len() != params.len() {
+        return Err(ParamProblem::Count {
+            expected: params.len(),
+            given: values.len(),
+        });
+    }
+    for (p, &value) in params.iter().zip(values) {
+        check_one(p, value)?;
+    }
+    check_triangles(values, params)
+}
+
+fn check_one(p: &Param, value: f64) -> Result<(), ParamProblem> {
+    let field = p.name.clone();
+    if !value.is_finite() {
+        return Err(ParamProblem::NonFinite { field, value });
+    }
+    if p.kind.must_be_positive() && value <= 0.0 {
+        return Err(ParamProblem::NotPositive {
+            field,
+            kind: p.kind.name().into(),
+            value,
+        });
+    }
+    Ok(())
+}
+
+/// Principal inertias of one body must satisfy I_a ≤ I_b + I_c for every component: otherwise
+/// no mass distribution has them.
+fn check_triangles(values: &[f64], params: &[Param]) -> Result<(), ParamProblem> {
+    let inertia_keys = params
+        .iter()
+        .filter(|p| p.kind == ParamKind::Inertia && p.index.is_some())
+        .map(|p| &p.key);
+    for key in inertia_keys {
+        let mut triple: Vec<(usize, f64)> = params
+            .iter()
+            .zip(values)
+            .filter(|(p, _)| &p.key == key)
+            .filter_map(|(p, &v)| p.index.map(|i| (i, v)))
+            .collect();
+        triple.sort_by_key(|&(i, _)| i);
+        let comps: Vec<f64> = triple.into_iter().map(|(_, v)| v).collect();
+        let [a, b, c] = comps[..] else { continue };
+        let others = [b + c, a + c, a + b];
+        if let Some(index) = (0..3).find(|&i| comps[i] > others[i]) {
+            return Err(ParamProblem::Triangle {
+                key: key.clone(),
+                values: comps.clone(),
+                index,
+                value: comps[index],
+            });
+        }
+    }
+    Ok(())
+}
+
+/// A short, readable rendering of a TOML value for error messages.
+fn describe(v: &Value) -> String {
+    match v {
+        Value::String(s) => format!("{s:?}"),
+        Value::Boolean(b) => b.to_string(),
+        Value::Array(items) => format!("an array of {} items", items.len()),
+        other => other.type_str().to_string(),
+    }
+}

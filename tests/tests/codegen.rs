@@ -1,0 +1,397 @@
+//! Code generation audits: generated code vs the IR interpreter (bit for bit), vs CasADi's golden
+//! values, vs finite differences; sparse vs dense Jacobians; J·W; baked vs runtime parameters;
+//! and the clear errors of the IR validator, the parameter files and the macro.
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use twv_generated::{baked, HenonHeiles, Lorenz, Segway7, Vehicle7, Vehicle8};
+use twv_ir::{Interpreted, Ir};
+use twv_model::{Mechanical, Model};
+
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+
+fn shipped_ir(name: &str) -> Ir {
+    let text = twv_generated::ir_json(name).expect("shipped model");
+    twv_ir::parse_ir(text, &format!("generated/ir/{name}.json")).expect("shipped IR is valid")
+}
+
+fn vehicle_params(ir: &Ir, file: &str) -> Vec<f64> {
+    ir.load_params(format!("{ROOT}/vehicles/{file}"))
+        .expect("shipped vehicle file is valid")
+}
+
+fn random_point<const NX: usize, const NU: usize>(rng: &mut ChaCha8Rng) -> ([f64; NX], [f64; NU]) {
+    (
+        std::array::from_fn(|_| rng.gen_range(-2.0..2.0)),
+        std::array::from_fn(|_| rng.gen_range(-50.0..50.0)),
+    )
+}
+
+fn random_w<const NX: usize, const K: usize>(rng: &mut ChaCha8Rng) -> [[f64; NX]; K] {
+    std::array::from_fn(|_| std::array::from_fn(|_| rng.gen_range(-1.0..1.0)))
+}
+
+#[track_caller]
+fn assert_bits(a: &[f64], b: &[f64], what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}: lengths");
+    for (i, (x, y)) in a.iter().zip(b).enumerate() {
+        assert_eq!(x.to_bits(), y.to_bits(), "{what}[{i}]: {x:e} vs {y:e}");
+    }
+}
+
+#[track_caller]
+fn assert_close(a: &[f64], b: &[f64], tol: f64, what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}: lengths");
+    for (i, (x, y)) in a.iter().zip(b).enumerate() {
+        let scale = 1f64.max(y.abs());
+        assert!(
+            (x - y).abs() <= tol * scale,
+            "{what}[{i}]: {x:e} vs {y:e} (tol {tol:e})"
+        );
+    }
+}
+
+/// Every `Model` method of `a` and `b` agrees bit for bit at random points.
+fn same_model<const NX: usize, const NU: usize>(
+    a: &impl Model<NX, NU>,
+    b: &impl Model<NX, NU>,
+    what: &str,
+) {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    assert_eq!(a.jac_x_colind(), b.jac_x_colind(), "{what}: colind");
+    assert_eq!(a.jac_x_row(), b.jac_x_row(), "{what}: row");
+    let nnz = a.jac_x_row().len();
+    for _ in 0..20 {
+        let (x, u) = random_point::<NX, NU>(&mut rng);
+        let (mut fa, mut fb) = ([0.0; NX], [0.0; NX]);
+        a.f(&x, &u, &mut fa);
+        b.f(&x, &u, &mut fb);
+        assert_bits(&fa, &fb, &format!("{what} f"));
+        let (mut ja, mut jb) = ([[0.0; NX]; NX], [[0.0; NX]; NX]);
+        a.jac_x(&x, &u, &mut ja);
+        b.jac_x(&x, &u, &mut jb);
+        assert_bits(
+            ja.as_flattened(),
+            jb.as_flattened(),
+            &format!("{what} jac_x"),
+        );
+        let (mut ua, mut ub) = ([[0.0; NU]; NX], [[0.0; NU]; NX]);
+        a.jac_u(&x, &u, &mut ua);
+        b.jac_u(&x, &u, &mut ub);
+        assert_bits(
+            ua.as_flattened(),
+            ub.as_flattened(),
+            &format!("{what} jac_u"),
+        );
+        let (mut sa, mut sb) = (vec![0.0; nnz], vec![0.0; nnz]);
+        a.jac_x_sparse(&x, &u, &mut sa);
+        b.jac_x_sparse(&x, &u, &mut sb);
+        assert_bits(&sa, &sb, &format!("{what} jac_x_sparse"));
+        let w = random_w::<NX, 3>(&mut rng);
+        let (mut f2a, mut f2b, mut oa, mut ob) =
+            ([0.0; NX], [0.0; NX], [[0.0; NX]; 3], [[0.0; NX]; 3]);
+        a.f_jw(&x, &u, &w, &mut f2a, &mut oa);
+        b.f_jw(&x, &u, &w, &mut f2b, &mut ob);
+        assert_bits(&f2a, &f2b, &format!("{what} f_jw f"));
+        assert_bits(
+            oa.as_flattened(),
+            ob.as_flattened(),
+            &format!("{what} f_jw"),
+        );
+    }
+}
+
+/// Every `Mechanical` method of `a` and `b` agrees bit for bit at random points.
+fn same_mechanics<const NX: usize, const NU: usize, const NS: usize>(
+    a: &impl Mechanical<NX, NU, NS>,
+    b: &impl Mechanical<NX, NU, NS>,
+    what: &str,
+) {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    for _ in 0..20 {
+        let (x, u) = random_point::<NX, NU>(&mut rng);
+        let (mut ma, mut mb) = ([[0.0; NS]; NS], [[0.0; NS]; NS]);
+        a.mass_matrix(&x, &mut ma);
+        b.mass_matrix(&x, &mut mb);
+        assert_bits(ma.as_flattened(), mb.as_flattened(), &format!("{what} M"));
+        let (mut va, mut vb) = ([0.0; NS], [0.0; NS]);
+        a.cp(&x, &mut va);
+        b.cp(&x, &mut vb);
+        assert_bits(&va, &vb, &format!("{what} Cp"));
+        a.gravity(&x, &mut va);
+        b.gravity(&x, &mut vb);
+        assert_bits(&va, &vb, &format!("{what} F"));
+        a.input_forces(&x, &u, &mut va);
+        b.input_forces(&x, &u, &mut vb);
+        assert_bits(&va, &vb, &format!("{what} Q"));
+        assert_bits(&[a.energy(&x)], &[b.energy(&x)], &format!("{what} energy"));
+        assert_bits(
+            &a.momentum(&x),
+            &b.momentum(&x),
+            &format!("{what} momentum"),
+        );
+    }
+}
+
+fn interpreted<const NX: usize, const NU: usize>(
+    name: &str,
+    params: &[f64],
+) -> Interpreted<NX, NU> {
+    Interpreted::new(&shipped_ir(name), params).expect("sizes match")
+}
+
+#[test]
+fn generated_matches_interpreter_bit_for_bit() {
+    let v8 = Vehicle8::with_defaults();
+    same_model(
+        &v8,
+        &interpreted::<8, 2>("vehicle8", v8.params()),
+        "vehicle8",
+    );
+    same_mechanics(
+        &v8,
+        &interpreted::<8, 2>("vehicle8", v8.params()),
+        "vehicle8",
+    );
+    let v7 = Vehicle7::with_defaults();
+    same_model(
+        &v7,
+        &interpreted::<7, 2>("vehicle7", v7.params()),
+        "vehicle7",
+    );
+    same_mechanics(
+        &v7,
+        &interpreted::<7, 2>("vehicle7", v7.params()),
+        "vehicle7",
+    );
+    let s7 = Segway7::with_defaults();
+    same_model(&s7, &interpreted::<7, 2>("segway7", s7.params()), "segway7");
+    same_mechanics(&s7, &interpreted::<7, 2>("segway7", s7.params()), "segway7");
+    let lz = Lorenz::with_defaults();
+    same_model(&lz, &interpreted::<3, 0>("lorenz", lz.params()), "lorenz");
+    let hh = HenonHeiles::with_defaults();
+    let hh_i = interpreted::<4, 0>("henon_heiles", hh.params());
+    same_model(&hh, &hh_i, "henon_heiles");
+    let x = [0.1, -0.2, 0.3, 0.05];
+    assert_bits(
+        &[hh.energy(&x)],
+        &[Mechanical::<4, 0, 0>::energy(&hh_i, &x)],
+        "henon_heiles energy",
+    );
+}
+
+/// f and the stored entries of ∂f/∂x at CasADi's golden points (parameters at their defaults).
+fn matches_golden<const NX: usize, const NU: usize>(model: &impl Model<NX, NU>, name: &str) {
+    let ir = shipped_ir(name);
+    assert!(!ir.golden().is_empty(), "{name}: no golden values");
+    for (k, g) in ir.golden().iter().enumerate() {
+        let x: [f64; NX] = g.x.as_slice().try_into().unwrap();
+        let u: [f64; NU] = g.u.as_slice().try_into().unwrap();
+        let mut f = [0.0; NX];
+        model.f(&x, &u, &mut f);
+        // f is dense in every shipped IR, so its stored entries are f itself.
+        assert_close(&f, &g.f, 1e-12, &format!("{name} golden {k} f"));
+        let mut j = vec![0.0; g.jac_x.len()];
+        model.jac_x_sparse(&x, &u, &mut j);
+        assert_close(&j, &g.jac_x, 1e-12, &format!("{name} golden {k} jac_x"));
+    }
+}
+
+#[test]
+fn generated_matches_casadi_golden_values() {
+    matches_golden(&Vehicle8::with_defaults(), "vehicle8");
+    matches_golden(&Vehicle7::with_defaults(), "vehicle7");
+    matches_golden(&Segway7::with_defaults(), "segway7");
+    matches_golden(&Lorenz::with_defaults(), "lorenz");
+    matches_golden(&HenonHeiles::with_defaults(), "henon_heiles");
+}
+
+/// ∂f/∂x and ∂f/∂u against central differences, relative to the scale of the entry.
+fn matches_finite_differences<const NX: usize, const NU: usize>(
+    model: &impl Model<NX, NU>,
+    what: &str,
+) {
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let central = |x: &[f64; NX], u: &[f64; NU], dx: Option<usize>, du: Option<usize>, h: f64| {
+        let (mut xp, mut xm, mut up, mut um) = (*x, *x, *u, *u);
+        dx.map(|j| (xp[j] += h, xm[j] -= h));
+        du.map(|j| (up[j] += h, um[j] -= h));
+        let (mut fp, mut fm) = ([0.0; NX], [0.0; NX]);
+        model.f(&xp, &up, &mut fp);
+        model.f(&xm, &um, &mut fm);
+        std::array::from_fn::<f64, NX, _>(|i| (fp[i] - fm[i]) / (2.0 * h))
+    };
+    for _ in 0..10 {
+        let (x, u) = random_point::<NX, NU>(&mut rng);
+        let (mut jx, mut ju) = ([[0.0; NX]; NX], [[0.0; NU]; NX]);
+        model.jac_x(&x, &u, &mut jx);
+        model.jac_u(&x, &u, &mut ju);
+        for j in 0..NX {
+            let fd = central(&x, &u, Some(j), None, 1e-6);
+            let col: Vec<f64> = jx.iter().map(|row| row[j]).collect();
+            assert_close(&col, &fd, 1e-6, &format!("{what} jac_x column {j}"));
+        }
+        for j in 0..NU {
+            let fd = central(&x, &u, None, Some(j), 1e-4);
+            let col: Vec<f64> = ju.iter().map(|row| row[j]).collect();
+            assert_close(&col, &fd, 1e-6, &format!("{what} jac_u column {j}"));
+        }
+    }
+}
+
+#[test]
+fn jacobians_match_central_differences() {
+    matches_finite_differences(&Vehicle8::with_defaults(), "vehicle8");
+    matches_finite_differences(&Vehicle7::with_defaults(), "vehicle7");
+    matches_finite_differences(&Segway7::with_defaults(), "segway7");
+    matches_finite_differences(&Lorenz::with_defaults(), "lorenz");
+    matches_finite_differences(&HenonHeiles::with_defaults(), "henon_heiles");
+}
+
+/// The sparse Jacobian scattered by its CCS pattern is the dense one, and the dense one is zero
+/// outside the pattern; f_jw equals f and the dense product J·W.
+fn sparse_and_jw_match_dense<const NX: usize, const NU: usize>(
+    model: &impl Model<NX, NU>,
+    what: &str,
+) {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let (colind, rows) = (model.jac_x_colind(), model.jac_x_row());
+    assert_eq!(colind.len(), NX + 1, "{what}: colind length");
+    for _ in 0..10 {
+        let (x, u) = random_point::<NX, NU>(&mut rng);
+        let mut dense = [[0.0; NX]; NX];
+        model.jac_x(&x, &u, &mut dense);
+        let mut values = vec![0.0; rows.len()];
+        model.jac_x_sparse(&x, &u, &mut values);
+        let mut scattered = [[0.0; NX]; NX];
+        for j in 0..NX {
+            for e in colind[j]..colind[j + 1] {
+                scattered[rows[e]][j] = values[e];
+            }
+        }
+        assert_bits(
+            scattered.as_flattened(),
+            dense.as_flattened(),
+            &format!("{what} sparse vs dense"),
+        );
+
+        let w = random_w::<NX, 8>(&mut rng);
+        let (mut f_jw, mut jw, mut f) = ([0.0; NX], [[0.0; NX]; 8], [0.0; NX]);
+        model.f_jw(&x, &u, &w, &mut f_jw, &mut jw);
+        model.f(&x, &u, &mut f);
+        assert_bits(&f_jw, &f, &format!("{what} f_jw f"));
+        let product: Vec<f64> = w
+            .iter()
+            .flat_map(|wk| {
+                dense
+                    .iter()
+                    .map(move |row| row.iter().zip(wk).map(|(a, b)| a * b).sum::<f64>())
+            })
+            .collect();
+        assert_close(
+            jw.as_flattened(),
+            &product,
+            1e-12,
+            &format!("{what} f_jw vs dense J·W"),
+        );
+        let mut jw_only = [[0.0; NX]; 8];
+        model.jw(&x, &u, &w, &mut jw_only);
+        assert_bits(
+            jw_only.as_flattened(),
+            jw.as_flattened(),
+            &format!("{what} jw"),
+        );
+    }
+}
+
+#[test]
+fn sparse_jacobian_and_jw_match_dense() {
+    sparse_and_jw_match_dense(&Vehicle8::with_defaults(), "vehicle8");
+    sparse_and_jw_match_dense(&Vehicle7::with_defaults(), "vehicle7");
+    sparse_and_jw_match_dense(&Segway7::with_defaults(), "segway7");
+    sparse_and_jw_match_dense(&Lorenz::with_defaults(), "lorenz");
+    sparse_and_jw_match_dense(&HenonHeiles::with_defaults(), "henon_heiles");
+    let ir = shipped_ir("vehicle8");
+    sparse_and_jw_match_dense(
+        &Interpreted::<8, 2>::with_defaults(&ir).unwrap(),
+        "vehicle8 interpreted",
+    );
+}
+
+#[test]
+fn baked_matches_runtime_bit_for_bit() {
+    let paper = vehicle_params(&shipped_ir("vehicle8"), "paper.toml");
+    assert_eq!(baked::Vehicle8::VALUES.as_slice(), paper.as_slice());
+    let v8 = Vehicle8::new(paper.as_slice().try_into().unwrap());
+    same_model(&baked::Vehicle8, &v8, "vehicle8 baked");
+    same_mechanics(&baked::Vehicle8, &v8, "vehicle8 baked");
+    let v7 = Vehicle7::new(
+        vehicle_params(&shipped_ir("vehicle7"), "paper.toml")
+            .try_into()
+            .unwrap(),
+    );
+    same_model(&baked::Vehicle7, &v7, "vehicle7 baked");
+    same_mechanics(&baked::Vehicle7, &v7, "vehicle7 baked");
+    let s7 = Segway7::new(
+        vehicle_params(&shipped_ir("segway7"), "segway.toml")
+            .try_into()
+            .unwrap(),
+    );
+    same_model(&baked::Segway7, &s7, "segway7 baked");
+    same_mechanics(&baked::Segway7, &s7, "segway7 baked");
+    same_model(&baked::Lorenz, &Lorenz::with_defaults(), "lorenz baked");
+    same_model(
+        &baked::HenonHeiles,
+        &HenonHeiles::with_defaults(),
+        "henon_heiles baked",
+    );
+}
+
+#[test]
+fn shipped_models_expose_sizes_and_metadata() {
+    assert_eq!(
+        (Vehicle8::NX, Vehicle8::NU, Vehicle8::NP, Vehicle8::NS),
+        (8, 2, 16, 4)
+    );
+    assert_eq!((Vehicle7::NX, Vehicle7::NU, Vehicle7::NS), (7, 2, 3));
+    assert_eq!((Segway7::NX, Segway7::NU, Segway7::NS), (7, 2, 3));
+    assert_eq!(
+        (Lorenz::NX, Lorenz::NU, Lorenz::NP, Lorenz::NS),
+        (3, 0, 3, 0)
+    );
+    assert_eq!((HenonHeiles::NX, HenonHeiles::NP), (4, 0));
+    assert_eq!(Vehicle8::PARAMS[9].name, "I2_xx");
+    assert_eq!(Vehicle8::PARAMS[9].index, Some(0));
+    assert_eq!(
+        Vehicle8::with_defaults().info().ir_hash,
+        shipped_ir("vehicle8").hash()
+    );
+    assert_eq!(baked::Segway7::PARAMS_SOURCE, "../vehicles/segway.toml");
+    for (name, _) in twv_generated::MODELS {
+        let ir = shipped_ir(name);
+        assert_eq!(ir.model(), name);
+    }
+}
+
+/// `visit` hands each shipped model name to generic code as its concrete type.
+#[test]
+fn visit_dispatches_model_names() {
+    struct Sizes;
+    impl twv_generated::Visitor for Sizes {
+        type Output = (&'static str, usize, usize);
+        fn visit<const NX: usize, const NU: usize, M: Model<NX, NU>>(self, m: M) -> Self::Output {
+            (m.info().name, NX, NU)
+        }
+    }
+    assert_eq!(
+        twv_generated::visit("vehicle7", None, Sizes).unwrap(),
+        ("vehicle7", 7, 2)
+    );
+    assert_eq!(
+        twv_generated::visit("lorenz", Some(&[10.0, 28.0, 2.5]), Sizes).unwrap(),
+        ("lorenz", 3, 0)
+    );
+    assert!(twv_generated::visit("lorenz", Some(&[1.0]), Sizes).is_err());
+    let err = twv_generated::visit("bicycle", None, Sizes).unwrap_err();
+    assert!(err.to_string().contains("unknown model `bicycle`"), "{err}");
+}
