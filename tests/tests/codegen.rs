@@ -395,3 +395,415 @@ fn visit_dispatches_model_names() {
     let err = twv_generated::visit("bicycle", None, Sizes).unwrap_err();
     assert!(err.to_string().contains("unknown model `bicycle`"), "{err}");
 }
+
+mod malformed_ir {
+    use serde_json::{json, Value};
+    use twv_ir::{parse_ir, InstrProblem, IrError, OutputProblem, Problem};
+
+    const LORENZ: &str = include_str!("../../generated/ir/lorenz.json");
+
+    /// Lorenz's IR edited by `edit`, with a matching content hash (so the edit is what fails).
+    fn edited(edit: impl FnOnce(&mut Value)) -> String {
+        let mut ir: Value = serde_json::from_str(LORENZ).unwrap();
+        edit(&mut ir);
+        twv_ir::rehash(&serde_json::to_string_pretty(&ir).unwrap())
+    }
+
+    fn error(text: &str) -> IrError {
+        let err = parse_ir(text, "bad.json").expect_err("must be rejected");
+        assert!(
+            err.to_string().starts_with("bad.json: "),
+            "names the file: {err}"
+        );
+        err
+    }
+
+    #[test]
+    fn the_shipped_file_and_a_rehashed_copy_are_accepted() {
+        parse_ir(LORENZ, "lorenz.json").unwrap();
+        parse_ir(&edited(|_| {}), "lorenz.json").unwrap();
+    }
+
+    #[test]
+    fn wrong_format_version() {
+        let err = error(&edited(|ir| ir["format"] = json!("twv-ir/2")));
+        assert!(
+            matches!(err.problem, Problem::Format { ref found } if found.contains("twv-ir/2")),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn unknown_operation() {
+        let err = error(&edited(|ir| {
+            ir["functions"]["f"]["instructions"][3][1] = json!("frobnicate")
+        }));
+        let Problem::Instruction {
+            function,
+            index,
+            problem,
+        } = &err.problem
+        else {
+            panic!("{err}")
+        };
+        assert_eq!((function.as_str(), *index), ("f", 3));
+        assert_eq!(problem, &InstrProblem::UnknownOp("frobnicate".into()));
+        assert!(
+            err.to_string().contains("unknown operation `frobnicate`"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn operand_not_earlier() {
+        let err = error(&edited(|ir| {
+            ir["functions"]["f"]["instructions"][3][2] = json!(5)
+        }));
+        assert!(
+            matches!(
+                err.problem,
+                Problem::Instruction {
+                    problem: InstrProblem::NotEarlier { .. },
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        let err = error(&edited(|ir| {
+            ir["functions"]["f"]["instructions"][3][2] = json!(3)
+        }));
+        assert!(
+            matches!(
+                err.problem,
+                Problem::Instruction {
+                    problem: InstrProblem::NotEarlier { .. },
+                    ..
+                }
+            ),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn input_index_out_of_range() {
+        let err = error(&edited(|ir| {
+            ir["functions"]["f"]["instructions"][0][3] = json!(3)
+        }));
+        assert!(
+            matches!(
+                err.problem,
+                Problem::Instruction {
+                    problem: InstrProblem::InputIndex {
+                        arg: 2,
+                        size: 3,
+                        ..
+                    },
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        let err = error(&edited(|ir| {
+            ir["functions"]["f"]["instructions"][0][2] = json!(4)
+        }));
+        assert!(
+            matches!(
+                err.problem,
+                Problem::Instruction {
+                    problem: InstrProblem::InputArg(_),
+                    ..
+                }
+            ),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn wrong_arity_and_malformed_instructions() {
+        let err = error(&edited(|ir| {
+            ir["functions"]["f"]["instructions"][3] = json!([3, "sub", 1])
+        }));
+        assert!(
+            matches!(
+                err.problem,
+                Problem::Instruction {
+                    problem: InstrProblem::Arity { .. },
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        let err = error(&edited(|ir| {
+            ir["functions"]["f"]["instructions"][3] = json!({"op": "sub"})
+        }));
+        assert!(
+            matches!(
+                err.problem,
+                Problem::Instruction {
+                    problem: InstrProblem::Malformed(_),
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        let err = error(&edited(|ir| {
+            ir["functions"]["f"]["instructions"][3][0] = json!(4)
+        }));
+        assert!(
+            matches!(
+                err.problem,
+                Problem::Instruction {
+                    problem: InstrProblem::Id { .. },
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        let err = error(&edited(|ir| ir["functions"]["f"]["n_ops"] = json!(9)));
+        assert!(matches!(err.problem, Problem::Function { .. }), "{err}");
+    }
+
+    fn output_problem(err: &IrError) -> &OutputProblem {
+        match &err.problem {
+            Problem::Output { problem, .. } => problem,
+            _ => panic!("expected an output problem: {err}"),
+        }
+    }
+
+    #[test]
+    fn inconsistent_output_sparsity() {
+        let out = |ir: &mut Value| ir["functions"]["jac_x"]["outputs"][0].clone();
+        let err = error(&edited(|ir| {
+            ir["functions"]["jac_x"]["outputs"][0]["colind"] = json!([0, 3, 8])
+        }));
+        assert!(
+            matches!(
+                output_problem(&err),
+                OutputProblem::ColindLength {
+                    expected: 4,
+                    found: 3
+                }
+            ),
+            "{err}"
+        );
+        let err = error(&edited(|ir| {
+            ir["functions"]["jac_x"]["outputs"][0]["colind"] = json!([0, 3, 6, 7])
+        }));
+        assert!(
+            matches!(output_problem(&err), OutputProblem::ColindOrder { .. }),
+            "{err}"
+        );
+        let err = error(&edited(|ir| {
+            ir["functions"]["jac_x"]["outputs"][0]["row"][2] = json!(3)
+        }));
+        assert!(
+            matches!(
+                output_problem(&err),
+                OutputProblem::RowOutOfRange { row: 3, rows: 3 }
+            ),
+            "{err}"
+        );
+        let err = error(&edited(|ir| {
+            ir["functions"]["jac_x"]["outputs"][0]["row"][2] = json!(1)
+        }));
+        assert!(
+            matches!(output_problem(&err), OutputProblem::RowOrder { col: 0 }),
+            "{err}"
+        );
+        let err = error(&edited(|ir| {
+            let mut o = out(ir);
+            o["values"].as_array_mut().unwrap().pop();
+            ir["functions"]["jac_x"]["outputs"][0] = o;
+        }));
+        assert!(
+            matches!(
+                output_problem(&err),
+                OutputProblem::ValuesLength {
+                    expected: 8,
+                    found: 7
+                }
+            ),
+            "{err}"
+        );
+        let err = error(&edited(|ir| {
+            ir["functions"]["jac_x"]["outputs"][0]["values"][0] = json!(11)
+        }));
+        assert!(
+            matches!(
+                output_problem(&err),
+                OutputProblem::ValueOutOfRange { value: 11, .. }
+            ),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn shape_mismatch_and_missing_function() {
+        let err = error(&edited(|ir| {
+            ir["functions"]["f"]["outputs"][0]["rows"] = json!(4);
+        }));
+        assert!(
+            matches!(
+                output_problem(&err),
+                OutputProblem::Shape { .. } | OutputProblem::RowOutOfRange { .. }
+            ),
+            "{err}"
+        );
+        let err = error(&edited(|ir| {
+            ir["functions"]["f_jac_x"]["outputs"][1]["row"] = json!([0, 1, 2, 0, 1, 2, 0, 2]);
+        }));
+        assert!(
+            matches!(output_problem(&err), OutputProblem::SparsityMismatch(_)),
+            "{err}"
+        );
+        let err = error(&edited(|ir| {
+            ir["functions"].as_object_mut().unwrap().remove("jac_u");
+        }));
+        assert_eq!(err.problem, Problem::MissingFunction("jac_u".into()));
+    }
+
+    #[test]
+    fn truncated_and_malformed_json() {
+        let err = error(&LORENZ[..LORENZ.len() / 2]);
+        assert!(matches!(err.problem, Problem::Truncated { .. }), "{err}");
+        let err = error(&LORENZ.replacen("\"model\"", "model", 1));
+        assert!(
+            matches!(err.problem, Problem::Json { line: 4, .. }),
+            "{err}"
+        );
+        let err = error(&edited(|ir| ir["states"] = json!("x, y, z")));
+        assert!(matches!(err.problem, Problem::Schema(_)), "{err}");
+    }
+
+    #[test]
+    fn content_hash_mismatch() {
+        let text = LORENZ.replace("Lorenz (1963) convection model.", "Edited by hand.");
+        let err = error(&text);
+        assert!(matches!(err.problem, Problem::HashMismatch { .. }), "{err}");
+        assert!(err.to_string().contains("content hash mismatch"), "{err}");
+        let text = LORENZ.replacen("sha256:c3", "sha256:zz", 1);
+        assert!(matches!(error(&text).problem, Problem::MalformedHash(_)));
+    }
+
+    #[test]
+    fn interpreted_sizes_must_match() {
+        let ir = parse_ir(LORENZ, "lorenz.json").unwrap();
+        let err = twv_ir::Interpreted::<4, 0>::with_defaults(&ir).unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("lorenz.json: the model has 3 states, the caller expects 4"),
+            "{err}"
+        );
+        assert!(twv_ir::Interpreted::<3, 1>::with_defaults(&ir).is_err());
+        assert!(twv_ir::Interpreted::<3, 0>::new(&ir, &[1.0, 2.0]).is_err());
+        assert!(twv_ir::Interpreted::<3, 0>::new(&ir, &[1.0, f64::NAN, 2.0]).is_err());
+    }
+}
+
+mod parameter_files {
+    use twv_ir::{parse_params, ParamError, ParamProblem};
+
+    const PAPER: &str = include_str!("../../vehicles/paper.toml");
+
+    fn params() -> Vec<twv_ir::Param> {
+        super::shipped_ir("vehicle8").params().to_vec()
+    }
+
+    /// paper.toml with the line defining `key` replaced by `line`.
+    fn with_line(key: &str, line: &str) -> String {
+        PAPER
+            .lines()
+            .map(|l| {
+                if l.starts_with(&format!("{key} ")) {
+                    line
+                } else {
+                    l
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    }
+
+    fn error(text: &str, mentions: &[&str]) -> ParamError {
+        let err = parse_params(text, "my.toml", &params()).expect_err("must be rejected");
+        let msg = err.to_string();
+        assert!(msg.starts_with("my.toml: "), "names the file: {msg}");
+        for m in mentions {
+            assert!(msg.contains(m), "message mentions `{m}`: {msg}");
+        }
+        err
+    }
+
+    #[test]
+    fn shipped_files_load() {
+        let values = parse_params(PAPER, "paper.toml", &params()).unwrap();
+        assert_eq!((values[0], values[9], values[11]), (115.0, 0.81, 0.03));
+        let segway = include_str!("../../vehicles/segway.toml");
+        assert_eq!(
+            parse_params(segway, "segway.toml", &params()).unwrap()[1],
+            107.0
+        );
+    }
+
+    #[test]
+    fn unknown_and_missing_keys() {
+        let err = error(&format!("{PAPER}\nmass = 3.0\n"), &["mass"]);
+        assert_eq!(err.problem, ParamProblem::UnknownKey("mass".into()));
+        let err = error(&with_line("m1", ""), &["m1"]);
+        assert!(matches!(err.problem, ParamProblem::MissingKey { ref key, .. } if key == "m1"));
+    }
+
+    #[test]
+    fn wrong_types() {
+        let err = error(&with_line("m1", "m1 = \"heavy\""), &["m1", "heavy"]);
+        assert!(matches!(err.problem, ParamProblem::WrongType { .. }));
+        let err = error(&with_line("I2", "I2 = [0.81, 0.81]"), &["I2", "array of 3"]);
+        assert!(matches!(err.problem, ParamProblem::WrongType { .. }));
+        error(&with_line("g", "g = true"), &["g", "true"]);
+    }
+
+    #[test]
+    fn non_finite_values() {
+        let err = error(&with_line("b", "b = nan"), &["b", "NaN"]);
+        assert!(matches!(err.problem, ParamProblem::NonFinite { .. }));
+        error(
+            &with_line("I2", "I2 = [0.81, inf, 0.03]"),
+            &["I2_yy", "inf"],
+        );
+    }
+
+    #[test]
+    fn non_positive_mass_inertia_gravity() {
+        let err = error(&with_line("m2", "m2 = 0.0"), &["m2", "mass", "0"]);
+        assert!(matches!(err.problem, ParamProblem::NotPositive { .. }));
+        error(&with_line("g", "g = -9.81"), &["g", "gravity", "-9.81"]);
+        error(&with_line("I1", "I1 = [10.0, -1.0, 4.3]"), &["I1_yy", "-1"]);
+        // A length may be zero or negative (a centroid below the axle), only finite.
+        parse_params(&with_line("a", "a = -0.2"), "my.toml", &params()).unwrap();
+    }
+
+    #[test]
+    fn inertia_triangle_inequality() {
+        let err = error(
+            &with_line("I2", "I2 = [0.1, 0.2, 0.5]"),
+            &["I2", "triangle", "0.5"],
+        );
+        assert!(matches!(
+            err.problem,
+            ParamProblem::Triangle { index: 2, .. }
+        ));
+        // Equality is a flat body (a thin disc), allowed.
+        parse_params(
+            &with_line("I2", "I2 = [0.2, 0.3, 0.5]"),
+            "my.toml",
+            &params(),
+        )
+        .unwrap();
+    }
+
+    #[test]
+    fn malformed_toml() {
+        let err = error("m1 = = 3", &["malformed TOML"]);
+        assert!(matches!(err.problem, ParamProblem::Syntax(_)));
+    }
+}
