@@ -1,6 +1,8 @@
 //! twv analysis: everything that runs a model — integrators, Lyapunov spectra, the hand model
 //! and audit, control, tuning, sweeps, reports — and the `twv` command line.
 
+pub mod audit;
+pub mod cli;
 pub mod hand_model;
 pub mod integrate;
 pub mod lyapunov;

@@ -1,5 +1,13 @@
-//! The `twv` command line: a thin shell that turns the result of `run` into an exit code.
+//! The `twv` command line: a thin shell that turns the result of `run` into an exit code and
+//! prints an error once, without a backtrace.
+
+use clap::Parser;
+use twv_analysis::cli::{run, Cli};
 
 fn main() {
-    println!("twv: commands are being written");
+    let cli = Cli::parse();
+    if let Err(err) = run(cli) {
+        eprintln!("twv: error: {err:#}");
+        std::process::exit(1);
+    }
 }

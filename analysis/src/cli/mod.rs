@@ -1,0 +1,38 @@
+//! The `twv` command line: raw arguments (clap) are kept apart from the validated settings the
+//! library runs on; every command returns a `Result`, and the binary prints an error once.
+
+pub mod audit;
+pub mod codegen;
+pub mod eval;
+pub mod model;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+
+/// twv: two-wheeled self-balancing vehicle dynamics — generated equations of motion, audit,
+/// Lyapunov spectra, control and reports.
+#[derive(Parser, Debug)]
+#[command(name = "twv", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Evaluate ẋ = f(x, u) (and its Jacobians) at one state; JSON on stdout
+    Eval(eval::EvalArgs),
+    /// Print the Rust code generated from a model's IR, for people to read and audit
+    Codegen(codegen::CodegenArgs),
+    /// Audit the generated vehicle models against the independent hand model
+    Audit(audit::AuditArgs),
+}
+
+/// Run one command.
+pub fn run(cli: Cli) -> Result<()> {
+    match &cli.command {
+        Command::Eval(args) => eval::run(args),
+        Command::Codegen(args) => codegen::run(args),
+        Command::Audit(args) => audit::run(args),
+    }
+}
