@@ -33,13 +33,21 @@ pub struct OutputDir {
 impl OutputDir {
     /// Create (if needed) and check the folder by writing a probe file.
     pub fn create(dir: &Path) -> Result<Self, OutputError> {
-        let io = |source| OutputError::Io { path: dir.to_path_buf(), source };
+        let io = |source| OutputError::Io {
+            path: dir.to_path_buf(),
+            source,
+        };
         let created = !dir.exists();
         fs::create_dir_all(dir).map_err(io)?;
         let probe = dir.join(".twv-write-probe");
         fs::write(&probe, b"").map_err(io)?;
         fs::remove_file(&probe).map_err(io)?;
-        Ok(Self { dir: dir.to_path_buf(), created, written: Vec::new(), committed: false })
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            created,
+            written: Vec::new(),
+            committed: false,
+        })
     }
 
     /// The folder's path.
@@ -78,9 +86,18 @@ impl Drop for OutputDir {
 
 /// Write a file via a temporary sibling and a rename, so readers never see half a file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let io = |source| OutputError::Io { path: path.to_path_buf(), source };
-    let parent = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let io = |source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let parent = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
     let result = (|| {
         let mut file = fs::File::create(&tmp)?;
