@@ -9,8 +9,9 @@
 //! - `ir`: the IR file; `name`: the struct to emit; `bake` (optional): fold the parameters as
 //!   constants read from this TOML file, or from the IR defaults (`bake = defaults`). Without
 //!   `bake` the struct holds its parameters at run time.
-//! - Relative paths are relative to the `CARGO_MANIFEST_DIR` of the crate calling the macro
-//!   (absolute paths are used as they are). The expansion refers to `::twv_model`, so the calling
+//! - Relative paths are relative to the `CARGO_MANIFEST_DIR` of the crate calling the macro,
+//!   or, when the file is not there, to the nearest parent directory that has it (so paths from
+//!   the workspace root work in every member crate); absolute paths are used as they are. The expansion refers to `::twv_model`, so the calling
 //!   crate depends on `twv-model`.
 //! - The expansion `include_bytes!`es every file it read, so editing the IR or the baked TOML
 //!   rebuilds the calling crate with the new code.
@@ -85,7 +86,10 @@ fn pair(input: ParseStream) -> syn::Result<(Ident, Value)> {
     Ok((key, value))
 }
 
-/// Resolve a path argument against the calling crate's manifest directory.
+/// Resolve a path argument: absolute paths as they are; a relative path against the calling
+/// crate's `CARGO_MANIFEST_DIR`, or else against the nearest parent directory where it exists
+/// (so a workspace-root path such as `generated/ir/vehicle8.json` works from every member, and
+/// from the scratch crates of compile-fail tests under `target/`).
 fn resolve(lit: &LitStr) -> syn::Result<PathBuf> {
     let path = PathBuf::from(lit.value());
     if path.is_absolute() {
@@ -97,7 +101,17 @@ fn resolve(lit: &LitStr) -> syn::Result<PathBuf> {
             "CARGO_MANIFEST_DIR is not set (not built by cargo?)",
         )
     })?;
-    Ok(PathBuf::from(dir).join(path))
+    let dir = PathBuf::from(dir);
+    dir.ancestors()
+        .map(|base| base.join(&path))
+        .find(|candidate| candidate.is_file())
+        .ok_or_else(|| {
+            let msg = format!(
+                "{}: no such file in the calling crate's directory or any parent directory",
+                lit.value()
+            );
+            syn::Error::new(lit.span(), msg)
+        })
 }
 
 /// `include_bytes!` of a file, so cargo rebuilds the caller when it changes.
