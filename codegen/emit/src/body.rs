@@ -155,13 +155,13 @@ pub fn matrix_expr(o: &Output) -> TokenStream {
     quote!([#(#rows),*])
 }
 
-/// For each row of ∂f/∂x, `(∂f/∂x)_row · wk` over the stored entries, summed left to right in
-/// increasing column order (the interpreter's order), or `0.0` for an empty row.
+/// For each row of ∂f/∂x, `(∂f/∂x)_row · wk` over the stored entries `j[e]`, summed left to
+/// right in increasing column order (the interpreter's order), or `0.0` for an empty row.
 pub fn jw_rows(jac: &Output) -> Vec<TokenStream> {
     let mut rows: Vec<Vec<TokenStream>> = vec![Vec::new(); jac.rows];
-    for (r, c, v) in jac.entries() {
-        let (v, c) = (value(v), index(c));
-        rows[r].push(quote!(#v * wk[#c]));
+    for (e, (r, c, _)) in jac.entries().enumerate() {
+        let (e, c) = (index(e), index(c));
+        rows[r].push(quote!(j[#e] * wk[#c]));
     }
     rows.into_iter()
         .map(|terms| {

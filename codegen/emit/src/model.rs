@@ -64,6 +64,7 @@ pub fn emit(ir: &Ir, name: &Ident, params: &Params) -> Result<TokenStream, EmitE
     let header = header(ir, params);
     let header = header.iter().map(|line| quote!(#[doc = #line]));
     let structure = structure(ir, name, params)?;
+    let kernels = kernels(&parts, name)?;
     let model = model_impl(&parts, name)?;
     let extra = match ir.kind() {
         Kind::Multibody => mechanical_impl(&parts, name)?,
@@ -72,6 +73,7 @@ pub fn emit(ir: &Ir, name: &Ident, params: &Params) -> Result<TokenStream, EmitE
     Ok(quote! {
         #(#header)*
         #structure
+        #kernels
         #model
         #extra
     })
@@ -254,19 +256,62 @@ fn constructors(
     }
 }
 
-fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
+/// The IR functions `f`, `jac_x`, `jac_u`, `f_jac_x` as non-generic, non-`#[inline]` kernels:
+/// they are compiled inside the crate that invokes the macro (twv-generated builds at
+/// opt-level 3 in every profile), where `#[inline]` code would be compiled in each caller at
+/// the caller's opt-level (3x slower kernels in debug test builds). The trait methods below are
+/// `#[inline]` wrappers, so release builds lose one call, as with CasADi's C.
+fn kernels(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
     let (nx, nu) = (&p.nx, &p.nu);
     let f_body = p.lets("f", true)?;
     let f_out = vector_expr(p.output("f", "f")?);
     let jx_body = p.lets("jac_x", true)?;
-    let jx = p.output("jac_x", "jac_x")?;
-    let jx_out = matrix_expr(jx);
-    let jx_values = jx.values.iter().map(|&v| crate::body::value(v));
+    let jx_values = stored_values(p.output("jac_x", "jac_x")?);
     let ju_body = p.lets("jac_u", true)?;
     let ju_out = matrix_expr(p.output("jac_u", "jac_u")?);
     let fj_body = p.lets("f_jac_x", true)?;
     let fj_f = vector_expr(p.output("f_jac_x", "f")?);
-    let jw = jw_rows(p.output("f_jac_x", "jac_x")?);
+    let fj_values = stored_values(p.output("f_jac_x", "jac_x")?);
+    let allow = allow();
+    Ok(quote! {
+        #allow
+        impl #name {
+            /// Kernel of IR function `f`: ẋ.
+            pub fn kernel_f(&self, x: &[f64; #nx], u: &[f64; #nu], out: &mut [f64; #nx]) {
+                #f_body
+                *out = #f_out;
+            }
+            /// Kernel of IR function `jac_x`: the stored entries of ∂f/∂x (CCS order).
+            pub fn kernel_jac_x(&self, x: &[f64; #nx], u: &[f64; #nu]) -> [f64; Self::JAC_NNZ] {
+                #jx_body
+                #jx_values
+            }
+            /// Kernel of IR function `jac_u`: dense ∂f/∂u, row-major.
+            pub fn kernel_jac_u(&self, x: &[f64; #nx], u: &[f64; #nu], out: &mut [[f64; #nu]; #nx]) {
+                #ju_body
+                *out = #ju_out;
+            }
+            /// Kernel of IR function `f_jac_x`: ẋ into `f`, and the stored entries of ∂f/∂x.
+            pub fn kernel_f_jac_x(&self, x: &[f64; #nx], u: &[f64; #nu], f: &mut [f64; #nx]) -> [f64; Self::JAC_NNZ] {
+                #fj_body
+                *f = #fj_f;
+                #fj_values
+            }
+        }
+    })
+}
+
+/// `[vA, vB, ...]`: the value of each stored entry, in CCS order.
+fn stored_values(o: &Output) -> TokenStream {
+    let values = o.values.iter().map(|&v| crate::body::value(v));
+    quote!([#(#values),*])
+}
+
+fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
+    let (nx, nu) = (&p.nx, &p.nu);
+    let jac = p.output("jac_x", "jac_x")?;
+    let jx_dense = dense_from_stored(jac);
+    let jw = jw_rows(jac);
     let allow = allow();
     Ok(quote! {
         #allow
@@ -276,20 +321,18 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
 
             #[inline]
             fn f(&self, x: &[f64; #nx], u: &[f64; #nu], out: &mut [f64; #nx]) {
-                #f_body
-                *out = #f_out;
+                self.kernel_f(x, u, out);
             }
 
             #[inline]
             fn jac_x(&self, x: &[f64; #nx], u: &[f64; #nu], out: &mut [[f64; #nx]; #nx]) {
-                #jx_body
-                *out = #jx_out;
+                let j = self.kernel_jac_x(x, u);
+                *out = #jx_dense;
             }
 
             #[inline]
             fn jac_u(&self, x: &[f64; #nx], u: &[f64; #nu], out: &mut [[f64; #nu]; #nx]) {
-                #ju_body
-                *out = #ju_out;
+                self.kernel_jac_u(x, u, out);
             }
 
             #[inline]
@@ -300,9 +343,7 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
 
             #[inline]
             fn jac_x_sparse(&self, x: &[f64; #nx], u: &[f64; #nu], values: &mut [f64]) {
-                #jx_body
-                let stored: [f64; Self::JAC_NNZ] = [#(#jx_values),*];
-                for (slot, v) in values.iter_mut().zip(stored) {
+                for (slot, v) in values.iter_mut().zip(self.kernel_jac_x(x, u)) {
                     *slot = v;
                 }
             }
@@ -316,14 +357,24 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                 f: &mut [f64; #nx],
                 out: &mut [[f64; #nx]; K],
             ) {
-                #fj_body
-                *f = #fj_f;
+                let j = self.kernel_f_jac_x(x, u, f);
                 for (wk, ok) in w.iter().zip(out.iter_mut()) {
                     *ok = [#(#jw),*];
                 }
             }
         }
     })
+}
+
+/// The dense ∂f/∂x, row-major, from the stored entries `j` (`j[e]` or `0.0`).
+fn dense_from_stored(jac: &Output) -> TokenStream {
+    let mut grid = vec![vec![quote!(0.0); jac.cols]; jac.rows];
+    for (e, (r, c, _)) in jac.entries().enumerate() {
+        let e = index(e);
+        grid[r][c] = quote!(j[#e]);
+    }
+    let rows = grid.into_iter().map(|row| quote!([#(#row),*]));
+    quote!([#(#rows),*])
 }
 
 fn mechanical_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
