@@ -5,5 +5,6 @@ pub mod audit;
 pub mod cli;
 pub mod hand_model;
 pub mod integrate;
+pub mod linear;
 pub mod lyapunov;
 pub mod output;

@@ -1,0 +1,362 @@
+//! Linear analysis and tuning of the pitch loop (issue 6): linearisation, Routh–Hurwitz,
+//! margins against closed forms, LQR, and the Clarabel tuner with its independent check.
+//!
+//! The vehicle here is a hand-written nonlinear cart–pendulum with the study's values
+//! (m1 = 115, m2 = 8, b = 0.55, I2_yy = 0.81, g = 9.81, so M_x = 123), which is what every twv
+//! vehicle reduces to in the plane.
+
+use nalgebra::{Complex, DMatrix};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use twv_analysis::linear::{
+    analyse_pitch, eigenvalues, linearize, loop_margins, lqr, modes, solve_care, CareStatus,
+    CartPendulum, GridOptions, HiddenKind, LinearError, LoopOptions, ModeKind, OperatingPoint,
+    PidGains, PitchLoop,
+};
+use twv_model::{Model, ModelInfo};
+
+const M1: f64 = 115.0;
+const M2: f64 = 8.0;
+const B: f64 = 0.55;
+const I2_YY: f64 = 0.81;
+const G: f64 = 9.81;
+
+fn paper() -> CartPendulum {
+    CartPendulum::from_vehicle(M1, M2, B, I2_YY, G).unwrap()
+}
+
+/// Nonlinear cart–pendulum, state (Φ, x, w_y, v_x), input F1; Jacobians by central
+/// differences (the closed-form check below tolerates their 1e-9 error).
+struct Cart(CartPendulum);
+
+const STATES: [&str; 4] = ["phi", "x", "w_y", "v_x"];
+const H: f64 = 1e-6;
+
+impl Model<4, 1> for Cart {
+    fn info(&self) -> ModelInfo {
+        ModelInfo {
+            name: "cart",
+            ir_hash: "",
+            states: &STATES,
+            inputs: &["F1"],
+            params: &[],
+        }
+    }
+
+    fn f(&self, x: &[f64; 4], u: &[f64; 1], out: &mut [f64; 4]) {
+        let p = &self.0;
+        let ml = p.m_p * p.l;
+        let (s, c) = x[0].sin_cos();
+        // [I_p, ml c; ml c, M_x] [Φ̈; v̇_x] = [ml g s; F + ml s Φ̇²]
+        let det = p.i_p() * p.m_x - (ml * c).powi(2);
+        let r1 = ml * p.g * s;
+        let r2 = u[0] + ml * s * x[2] * x[2];
+        out[0] = x[2];
+        out[1] = x[3];
+        out[2] = (p.m_x * r1 - ml * c * r2) / det;
+        out[3] = (p.i_p() * r2 - ml * c * r1) / det;
+    }
+
+    fn jac_x(&self, x: &[f64; 4], u: &[f64; 1], out: &mut [[f64; 4]; 4]) {
+        for j in 0..4 {
+            let (mut xp, mut xm) = (*x, *x);
+            xp[j] += H;
+            xm[j] -= H;
+            let (mut fp, mut fm) = ([0.0; 4], [0.0; 4]);
+            self.f(&xp, u, &mut fp);
+            self.f(&xm, u, &mut fm);
+            for i in 0..4 {
+                out[i][j] = (fp[i] - fm[i]) / (2.0 * H);
+            }
+        }
+    }
+
+    fn jac_u(&self, x: &[f64; 4], u: &[f64; 1], out: &mut [[f64; 1]; 4]) {
+        let (mut fp, mut fm) = ([0.0; 4], [0.0; 4]);
+        self.f(x, &[u[0] + H], &mut fp);
+        self.f(x, &[u[0] - H], &mut fm);
+        for i in 0..4 {
+            out[i][0] = (fp[i] - fm[i]) / (2.0 * H);
+        }
+    }
+
+    fn jac_x_colind(&self) -> &[usize] {
+        &[0, 4, 8, 12, 16]
+    }
+
+    fn jac_x_row(&self) -> &[usize] {
+        &[0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3, 0, 1, 2, 3]
+    }
+
+    fn jac_x_sparse(&self, x: &[f64; 4], u: &[f64; 1], values: &mut [f64]) {
+        let mut j = [[0.0; 4]; 4];
+        self.jac_x(x, u, &mut j);
+        for (k, v) in values.iter_mut().enumerate().take(16) {
+            *v = j[k % 4][k / 4];
+        }
+    }
+
+    fn f_jw<const K: usize>(
+        &self,
+        x: &[f64; 4],
+        u: &[f64; 1],
+        w: &[[f64; 4]; K],
+        f: &mut [f64; 4],
+        out: &mut [[f64; 4]; K],
+    ) {
+        self.f(x, u, f);
+        let mut j = [[0.0; 4]; 4];
+        self.jac_x(x, u, &mut j);
+        for k in 0..K {
+            for i in 0..4 {
+                out[k][i] = (0..4).map(|c| j[i][c] * w[k][c]).sum();
+            }
+        }
+    }
+}
+
+/// The pitch loop from the closed-form matrices (exact, so margins can be checked to 1e-6).
+fn pitch_loop() -> PitchLoop {
+    let (a, b) = paper().matrices();
+    PitchLoop::new(&a, &b, &[1.0], &CartPendulum::state_names()).unwrap()
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs().max(1e-300)
+}
+
+#[test]
+fn linearisation_matches_the_closed_form_and_names_the_drift() {
+    let cp = paper();
+    let lin = linearize(&Cart(cp), &OperatingPoint::Upright, &[0.0]).unwrap();
+    let (a, b) = lin.dynamic();
+    let (a_ref, b_ref) = cp.matrices();
+    assert!((&a - &a_ref).amax() < 1e-7 * a_ref.amax(), "{a} vs {a_ref}");
+    assert!((&b - &b_ref).amax() < 1e-7 * b_ref.amax());
+    assert_eq!(lin.residual, 0.0);
+
+    let lambda = cp.lambda_sq().sqrt();
+    let eig = eigenvalues(&a).unwrap();
+    assert!(rel(eig[0].re, lambda) < 1e-7 && eig[0].im == 0.0);
+    assert!(rel(eig[3].re, -lambda) < 1e-7);
+    let names = lin.states.clone();
+    let m = modes(&a, &names).unwrap();
+    let drift: Vec<_> = m.iter().filter(|m| m.kind == ModeKind::Drift).collect();
+    assert_eq!(drift.len(), 2, "{m:?}");
+    for d in drift {
+        let mut s = d.states.clone();
+        s.sort();
+        assert_eq!(s, ["v_x", "x"], "{d:?}");
+    }
+
+    // Hanging: ±iλ (the linearisation flips the sign of gravity).
+    let hang = linearize(&Cart(cp), &OperatingPoint::Hanging, &[0.0]).unwrap();
+    let (ah, _) = hang.dynamic();
+    let m = modes(&ah, &names).unwrap();
+    let osc: Vec<_> = m.iter().filter(|m| m.kind == ModeKind::Marginal).collect();
+    assert_eq!(osc.len(), 2, "{m:?}");
+    assert!(rel(osc[0].eigenvalue.im.abs(), lambda) < 1e-6);
+
+    // The model-built loop agrees with the closed-form one.
+    let from_model = PitchLoop::from_linearization(&lin, &[1.0]).unwrap();
+    let g = PidGains::pd(3860.0, 1980.0);
+    let l1 = from_model.loop_delay_free(&g, 0.0, 2.0).unwrap();
+    let l2 = pitch_loop().loop_delay_free(&g, 0.0, 2.0).unwrap();
+    assert!((l1 - l2).norm() < 1e-7 * l2.norm());
+}
+
+#[test]
+fn closed_loop_stability_agrees_with_routh_hurwitz_for_500_random_gains() {
+    let cp = paper();
+    let lp = pitch_loop();
+    let mxg = cp.m_x * cp.g;
+    let mut rng = ChaCha8Rng::seed_from_u64(6);
+    let mut checked = 0;
+    let mut stable = 0;
+    while checked < 500 {
+        let kp = rng.gen_range(0.0..3.0 * mxg);
+        let kd = rng.gen_range(-300.0..3000.0);
+        let ki = if rng.gen_bool(0.5) {
+            0.0
+        } else {
+            rng.gen_range(-50.0..1.5 * cp.ki_limit(kp, kd).max(100.0))
+        };
+        let g = PidGains { kp, ki, kd };
+        // Skip the measure-zero neighbourhood of the boundary, where a verdict is rounding.
+        let near = |x: f64, b: f64| (x - b).abs() <= 1e-6 * b.abs().max(1.0);
+        if near(kp, mxg)
+            || near(kd, 0.0)
+            || (ki != 0.0 && (near(ki, 0.0) || near(ki, cp.ki_limit(kp, kd))))
+        {
+            continue;
+        }
+        let cl = lp.closed_loop(&g, &LoopOptions::default()).unwrap();
+        assert_eq!(
+            cl.stable,
+            cp.routh_hurwitz_stable(&g),
+            "{g:?}: {:?}",
+            cl.loop_eigenvalues
+        );
+        // x and v_x are invisible to the loop: the uncontrolled drift, two zero eigenvalues.
+        assert_eq!(cl.hidden.len(), 1);
+        let h = &cl.hidden[0];
+        assert_eq!(h.kind, HiddenKind::Unobservable);
+        // A Jordan pair: its zero eigenvalues come out of QR perturbed by about √ε.
+        assert!(h.eigenvalues.iter().all(|e| e.norm() < 1e-6));
+        let mut names = h.states.clone();
+        names.sort();
+        assert_eq!(names, ["v_x", "x"]);
+        assert_eq!(cl.all_eigenvalues.len(), 4 + usize::from(ki != 0.0));
+        stable += usize::from(cl.stable);
+        checked += 1;
+    }
+    assert!(
+        stable > 50 && stable < 450,
+        "both verdicts exercised: {stable}"
+    );
+}
+
+#[test]
+fn margins_match_closed_forms() {
+    let s = |w: f64| Complex::new(0.0, w);
+    let grid = GridOptions::around(&[1.0]);
+
+    // L = 1/(s(s+1)): ω_c² = (√5 − 1)/2, PM = 90° − atan ω_c; |S − ½|² peaks at ω = 1 with
+    // value (1 + 4)/4, so α = 2/√5; no phase crossover: gain margins (0, ∞).
+    let l = |w: f64| (w != 0.0).then(|| (s(w) * (s(w) + 1.0)).inv());
+    let m = loop_margins(&l, 0.0, true, &grid);
+    let wc = ((5f64.sqrt() - 1.0) / 2.0).sqrt();
+    assert_eq!(m.gain_crossovers.len(), 1);
+    assert!(rel(m.gain_crossovers[0], wc) < 1e-9);
+    assert!(rel(m.phase_margin_deg, 90.0 - wc.atan().to_degrees()) < 1e-9);
+    assert!(rel(m.disk.alpha, 2.0 / 5f64.sqrt()) < 1e-9, "{:?}", m.disk);
+    assert!(rel(m.disk.frequency, 1.0) < 1e-5);
+    assert!(
+        rel(
+            m.disk.phase_deg,
+            2.0 * (1.0 / 5f64.sqrt()).atan().to_degrees()
+        ) < 1e-9
+    );
+    assert!(m.gain_margin_upper.is_infinite() && m.gain_margin_lower == 0.0);
+
+    // L = 2/(s+1)³: phase crossover at √3 with |L| = 1/4 (GM 4); |L| = 1 at
+    // ω_c = √(2^{2/3} − 1), PM = 180° − 3 atan ω_c; delay margin PM/ω_c.
+    let l = |w: f64| Some((s(w) + 1.0).powi(3).inv() * 2.0);
+    let m = loop_margins(&l, 0.0, true, &grid);
+    assert!(rel(m.gain_margin_upper, 4.0) < 1e-9);
+    assert!(rel(m.phase_crossovers[0], 3f64.sqrt()) < 1e-9);
+    let wc = (2f64.powf(2.0 / 3.0) - 1.0).sqrt();
+    let pm = 180.0 - 3.0 * wc.atan().to_degrees();
+    assert!(rel(m.phase_margin_deg, pm) < 1e-9);
+    assert!(rel(m.delay_margin, pm.to_radians() / wc) < 1e-9);
+
+    // The same loop with a delay: stable just below the delay margin, unstable just above.
+    let dm = pm.to_radians() / wc;
+    assert!(loop_margins(&l, 0.99 * dm, true, &grid).stable);
+    assert!(!loop_margins(&l, 1.01 * dm, true, &grid).stable);
+}
+
+/// The study's PD (Kp = 3860, Kd = 1980) on the paper vehicle: closed forms for every margin.
+#[test]
+fn study_pd_is_stabilising_with_closed_form_margins() {
+    let cp = paper();
+    let g = PidGains::pd(3860.0, 1980.0);
+    let mxg = cp.m_x * cp.g;
+    assert!(g.kp > mxg && rel(mxg, 1206.63) < 1e-12);
+    let lp = pitch_loop();
+    let an = analyse_pitch(&lp, &g, &LoopOptions::default()).unwrap();
+    assert!(an.closed_loop.stable && an.margins.stable);
+    assert!(an.closed_loop.spectral_abscissa < 0.0);
+
+    // L(jω) = −c (Kp + j Kd ω)/(ω² + λ²), c = m_p l/Δ.
+    let c = cp.m_p * cp.l / cp.delta();
+    let a = cp.lambda_sq();
+    let m = &an.margins;
+    assert!(rel(m.gain_margin_lower, mxg / g.kp) < 1e-9, "{m:?}");
+    assert!(m.gain_margin_upper.is_infinite());
+    // |L| = 1: u² + (2a − c²Kd²) u + a² − c²Kp² = 0, u = ω².
+    let (bq, cq) = (2.0 * a - (c * g.kd).powi(2), a * a - (c * g.kp).powi(2));
+    let wc = ((-bq + (bq * bq - 4.0 * cq).sqrt()) / 2.0).sqrt();
+    assert!(rel(m.phase_margin_frequency, wc) < 1e-9);
+    assert!(rel(m.phase_margin_deg, (g.kd * wc / g.kp).atan().to_degrees()) < 1e-9);
+    // |S − ½|² = ¼ r, r = 1 + 4p v/((p − v)² + d(v − a)), v = ω² + a, maximised at
+    // v = √(p² − d a) when that exceeds a, else at DC.
+    let (p, d) = (c * g.kp, (c * g.kd).powi(2));
+    let v = (p * p - d * a).max(a * a).sqrt();
+    let r = 1.0 + 4.0 * p * v / ((p - v).powi(2) + d * (v - a));
+    assert!(rel(m.disk.alpha, 2.0 / r.sqrt()) < 1e-9, "{:?}", m.disk);
+    println!(
+        "study PD: GM_low = {:.6} ({:.3} dB), PM = {:.4} deg at {:.4} rad/s, delay margin {:.5} s, \
+         disk alpha = {:.6}, DGM = [{:.4}, {:.4}], DPM = {:.4} deg at {} rad/s, Ms = {:.4}; poles {:?}",
+        m.gain_margin_lower,
+        20.0 * m.gain_margin_lower.log10(),
+        m.phase_margin_deg,
+        m.phase_margin_frequency,
+        m.delay_margin,
+        m.disk.alpha,
+        m.disk.gain_low,
+        m.disk.gain_high,
+        m.disk.phase_deg,
+        m.disk.frequency,
+        m.peak_sensitivity,
+        an.closed_loop.loop_eigenvalues
+    );
+}
+
+#[test]
+fn lqr_solves_the_riccati_equation_and_stabilises() {
+    // Scalar: ẋ = x + u, q = r = 1: P = 1 + √2.
+    let one = DMatrix::from_element(1, 1, 1.0);
+    let sol = solve_care(&one, &one, &one, &one).unwrap();
+    assert_eq!(sol.status, CareStatus::Solved);
+    assert!(rel(sol.p[(0, 0)], 1.0 + 2f64.sqrt()) < 1e-12);
+
+    // The cart–pendulum, all four states weighted.
+    let (a, b) = paper().matrices();
+    let q = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&[
+        100.0, 1.0, 10.0, 1.0,
+    ]));
+    let r = DMatrix::from_element(1, 1, 1e-4);
+    let k = lqr(&a, &b, &q, &r).unwrap();
+    assert_eq!(k.status, CareStatus::Solved);
+    assert!(k.residual <= 1e-9, "residual {}", k.residual);
+    assert!(k.spectral_abscissa < 0.0);
+    println!(
+        "cart-pendulum LQR: K = {}, residual {:.2e}, poles {:?}",
+        k.k, k.residual, k.closed_loop_eigenvalues
+    );
+
+    // An unstable mode the input cannot reach: no stabilising solution, reported as a status.
+    let a = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&[1.0, 2.0]));
+    let b = DMatrix::from_column_slice(2, 1, &[1.0, 0.0]);
+    let sol = solve_care(&a, &b, &DMatrix::identity(2, 2), &one).unwrap();
+    assert_eq!(sol.status, CareStatus::NoStabilisingSolution);
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    let lp = pitch_loop();
+    let nan = PidGains::pd(f64::NAN, 1.0);
+    assert!(matches!(
+        lp.closed_loop(&nan, &LoopOptions::default()),
+        Err(LinearError::NonFinite { .. })
+    ));
+    let lag = LoopOptions {
+        lag: -0.1,
+        delay: 0.0,
+    };
+    assert!(matches!(
+        lp.closed_loop(&PidGains::pd(1.0, 1.0), &lag),
+        Err(LinearError::Negative { .. })
+    ));
+    let (a, b) = paper().matrices();
+    assert!(matches!(
+        PitchLoop::new(&a, &b, &[1.0, 2.0], &CartPendulum::state_names()),
+        Err(LinearError::Dimension { .. })
+    ));
+    let r = DMatrix::from_element(1, 1, -1.0);
+    assert!(matches!(
+        lqr(&a, &b, &DMatrix::identity(4, 4), &r),
+        Err(LinearError::Weight { .. })
+    ));
+}
