@@ -10,8 +10,6 @@
 //! - The IR text of each model ([`ir_json`], [`MODELS`]) so a binary can embed it.
 //! - [`visit`]: dispatch a model name to its concrete type without trait objects.
 
-use twv_model::Model;
-
 twv_macros::twv_model!(ir = "ir/vehicle8.json", name = Vehicle8);
 twv_macros::twv_model!(ir = "ir/vehicle7.json", name = Vehicle7);
 twv_macros::twv_model!(ir = "ir/segway7.json", name = Segway7);
@@ -60,15 +58,8 @@ pub fn ir_json(name: &str) -> Option<&'static str> {
         .map(|(_, text)| *text)
 }
 
-/// Something to do with a model whose sizes are only known once a name is resolved.
-/// [`visit`] calls `visit` with the concrete model type, so the work is monomorphised and
-/// inlined exactly as if the caller had named the type.
-pub trait Visitor {
-    /// What the visit returns.
-    type Output;
-    /// Do the work with a concrete model.
-    fn visit<const NX: usize, const NU: usize, M: Model<NX, NU>>(self, model: M) -> Self::Output;
-}
+/// What [`visit`] runs (the trait lives in twv-model so the IR interpreter's dispatch shares it).
+pub use twv_model::ModelVisitor as Visitor;
 
 /// A name that is not a shipped model, or parameter values of the wrong count.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -396,6 +396,27 @@ fn visit_dispatches_model_names() {
     assert!(err.to_string().contains("unknown model `bicycle`"), "{err}");
 }
 
+/// `visit_interpreted` hands an IR file's model to generic code with its sizes as constants.
+#[test]
+fn visit_interpreted_dispatches_ir_sizes() {
+    struct FirstRate;
+    impl twv_model::ModelVisitor for FirstRate {
+        type Output = (usize, usize, f64);
+        fn visit<const NX: usize, const NU: usize, M: Model<NX, NU>>(self, m: M) -> Self::Output {
+            let mut f = [0.0; NX];
+            m.f(&[0.1; NX], &[1.0; NU], &mut f);
+            (NX, NU, f[NX - 1])
+        }
+    }
+    let ir = shipped_ir("segway7");
+    let (nx, nu, rate) = twv_ir::visit_interpreted(&ir, &ir.defaults(), FirstRate).unwrap();
+    let mut f = [0.0; 7];
+    Segway7::with_defaults().f(&[0.1; 7], &[1.0; 2], &mut f);
+    assert_eq!((nx, nu, rate.to_bits()), (7, 2, f[6].to_bits()));
+    let err = twv_ir::visit_interpreted(&ir, &[1.0], FirstRate).unwrap_err();
+    assert!(err.to_string().contains("16 parameters"), "{err}");
+}
+
 mod malformed_ir {
     use serde_json::{json, Value};
     use twv_ir::{parse_ir, InstrProblem, IrError, OutputProblem, Problem};

@@ -356,3 +356,64 @@ impl<const NX: usize, const NU: usize, const NS: usize> Mechanical<NX, NU, NS>
         out
     }
 }
+
+/// An IR whose sizes [`visit_interpreted`] does not instantiate.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{file}: {nx} states and {nu} inputs; the interpreter dispatch supports 1..={max_nx} states and 0..={max_nu} inputs")]
+pub struct UnsupportedSize {
+    pub file: String,
+    pub nx: usize,
+    pub nu: usize,
+    pub max_nx: usize,
+    pub max_nu: usize,
+}
+
+/// Why [`visit_interpreted`] could not run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum VisitError {
+    #[error(transparent)]
+    Size(#[from] UnsupportedSize),
+    #[error(transparent)]
+    Model(#[from] ModelError),
+}
+
+macro_rules! dispatch_sizes {
+    ($ir:expr, $params:expr, $visitor:expr; $($nx:literal),*; $nus:tt) => {{
+        let (ir, params, visitor) = ($ir, $params, $visitor);
+        match ir.nx() {
+            $($nx => dispatch_sizes!(@nu ir, params, visitor, $nx, $nus),)*
+            _ => Err(unsupported(ir)),
+        }
+    }};
+    (@nu $ir:ident, $params:ident, $visitor:ident, $nx:literal, [$($nu:literal),*]) => {
+        match $ir.nu() {
+            $($nu => Ok($visitor.visit(Interpreted::<$nx, $nu>::new($ir, $params)?)),)*
+            _ => Err(unsupported($ir)),
+        }
+    };
+}
+
+const MAX_NX: usize = 12;
+const MAX_NU: usize = 4;
+
+fn unsupported(ir: &Ir) -> VisitError {
+    VisitError::Size(UnsupportedSize {
+        file: ir.file().to_string(),
+        nx: ir.nx(),
+        nu: ir.nu(),
+        max_nx: MAX_NX,
+        max_nu: MAX_NU,
+    })
+}
+
+/// Run `visitor` on the interpreted model of `ir` with `params` (IR order), choosing the const
+/// sizes `NX`, `NU` from the IR at run time: how `--ir FILE` reaches code generic over
+/// [`Model`]. Each supported (NX, NU) pair instantiates the visitor once, so this costs compile
+/// time in the caller: 12 × 5 instantiations.
+pub fn visit_interpreted<V: twv_model::ModelVisitor>(
+    ir: &Ir,
+    params: &[f64],
+    visitor: V,
+) -> Result<V::Output, VisitError> {
+    dispatch_sizes!(ir, params, visitor; 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12; [0, 1, 2, 3, 4])
+}

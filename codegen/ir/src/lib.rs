@@ -19,7 +19,7 @@ pub use error::{
     WorkTooShort,
 };
 pub use hash::{content_hash, rehash, sha256_hex, HASH_PLACEHOLDER};
-pub use interp::Interpreted;
+pub use interp::{visit_interpreted, Interpreted, UnsupportedSize, VisitError};
 pub use ops::{BinaryOp, UnaryOp};
 pub use params::{check_values, load_params, parse_params};
 pub use types::{

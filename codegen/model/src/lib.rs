@@ -97,6 +97,16 @@ pub trait Model<const NX: usize, const NU: usize> {
     }
 }
 
+/// Generic work over a model whose type is only chosen at run time (a `--model NAME` or an
+/// `--ir FILE`): the dispatcher (`twv_generated::visit`, `twv_ir::visit_interpreted`) calls
+/// `visit` with the concrete model, so the work is monomorphised as if the caller had named it.
+pub trait ModelVisitor {
+    /// What the visit returns.
+    type Output;
+    /// Do the work with a concrete model.
+    fn visit<const NX: usize, const NU: usize, M: Model<NX, NU>>(self, model: M) -> Self::Output;
+}
+
 /// The parts of a mechanical model in Poincaré form M(q) ṗ + C(q,p) p + F(q) = Q(u), used by
 /// the audit and the invariant checks. `NS` is the number of quasi-velocities (the last `NS`
 /// states). Matrices are row-major.
