@@ -1,0 +1,184 @@
+//! The variational state and the fused vector operations the steppers are built from.
+
+/// A point of the variational system: the state `x`, `K` tangent vectors `w[k]`, and the
+/// quadrature ∫ tr(∂F/∂x) dt.
+///
+/// The steppers use the same type for stage derivatives (then `trace_integral` holds tr J).
+/// `repr(C)` keeps the layout one contiguous block, which the fused loops below stream through.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct VarState<const N: usize, const K: usize> {
+    /// The state x.
+    pub x: [f64; N],
+    /// The tangent vectors, one row each.
+    pub w: [[f64; N]; K],
+    /// ∫ tr(∂F/∂x) dt since the stepper started (0 unless the trace quadrature is on).
+    pub trace_integral: f64,
+}
+
+impl<const N: usize, const K: usize> VarState<N, K> {
+    /// All zeros.
+    pub const ZERO: Self = Self {
+        x: [0.0; N],
+        w: [[0.0; N]; K],
+        trace_integral: 0.0,
+    };
+
+    /// A state with the given x and tangents and a zero quadrature.
+    pub fn new(x: [f64; N], w: [[f64; N]; K]) -> Self {
+        Self {
+            x,
+            w,
+            trace_integral: 0.0,
+        }
+    }
+
+    /// Number of f64 components: x, the tangents, and the quadrature.
+    pub const LEN: usize = N + N * K + 1;
+
+    /// All components as one slice, in the order x, w[0], …, w[K−1], trace_integral.
+    #[inline(always)]
+    pub fn as_slice(&self) -> &[f64] {
+        // SAFETY: `repr(C)` with fields [f64; N], [[f64; N]; K], f64: every field has the
+        // alignment and stride of f64 and arrays have no padding, so the struct is exactly
+        // LEN consecutive, initialised f64 values.
+        unsafe { core::slice::from_raw_parts((self as *const Self).cast::<f64>(), Self::LEN) }
+    }
+
+    /// All components as one mutable slice (see [`as_slice`](Self::as_slice)).
+    #[inline(always)]
+    pub fn as_mut_slice(&mut self) -> &mut [f64] {
+        // SAFETY: as in `as_slice`; the exclusive borrow of `self` covers the whole slice.
+        unsafe { core::slice::from_raw_parts_mut((self as *mut Self).cast::<f64>(), Self::LEN) }
+    }
+
+    /// Applies `op` to every component of `self` with the matching component of `a`.
+    ///
+    /// One flat loop over the contiguous block (rather than nested loops over x and the rows of
+    /// w) is what lets the compiler vectorise the stage arithmetic.
+    #[inline(always)]
+    pub(crate) fn zip1(&mut self, a: &Self, mut op: impl FnMut(&mut f64, f64)) {
+        for (s, a) in self.as_mut_slice().iter_mut().zip(a.as_slice()) {
+            op(s, *a);
+        }
+    }
+
+    /// Applies `op` to every component of `self` with the matching components of `a` and `b`.
+    #[inline(always)]
+    pub(crate) fn zip2(&mut self, a: &Self, b: &Self, mut op: impl FnMut(&mut f64, f64, f64)) {
+        for ((s, a), b) in self
+            .as_mut_slice()
+            .iter_mut()
+            .zip(a.as_slice())
+            .zip(b.as_slice())
+        {
+            op(s, *a, *b);
+        }
+    }
+
+    /// Applies `op` to every component of the two outputs `self`, `b` and the inputs `c`, `d`:
+    /// two results from one pass over memory.
+    #[inline(always)]
+    pub(crate) fn zip_pair(
+        &mut self,
+        b: &mut Self,
+        c: &Self,
+        d: &Self,
+        mut op: impl FnMut(&mut f64, &mut f64, f64, f64),
+    ) {
+        for (((a, b), c), d) in self
+            .as_mut_slice()
+            .iter_mut()
+            .zip(b.as_mut_slice().iter_mut())
+            .zip(c.as_slice())
+            .zip(d.as_slice())
+        {
+            op(a, b, *c, *d);
+        }
+    }
+
+    /// `self += c (a + k)` and whether every result is finite, in one pass: the last RK4
+    /// update with its blow-up check. Four lanes of `v · 0` sums (finite → 0, else NaN) keep
+    /// the check off the critical path.
+    #[inline(always)]
+    pub(crate) fn add_sum_checked(&mut self, c: f64, a: &Self, k: &Self) -> bool {
+        let mut lanes = [0.0f64; 4];
+        let (s, a, k) = (self.as_mut_slice(), a.as_slice(), k.as_slice());
+        let mut sc = s.chunks_exact_mut(4);
+        let (mut ac, mut kc) = (a.chunks_exact(4), k.chunks_exact(4));
+        for ((s4, a4), k4) in (&mut sc).zip(&mut ac).zip(&mut kc) {
+            for j in 0..4 {
+                s4[j] += c * (a4[j] + k4[j]);
+                lanes[j] += s4[j] * 0.0;
+            }
+        }
+        for ((s, a), k) in sc
+            .into_remainder()
+            .iter_mut()
+            .zip(ac.remainder())
+            .zip(kc.remainder())
+        {
+            *s += c * (a + k);
+            lanes[0] += *s * 0.0;
+        }
+        lanes.iter().sum::<f64>().is_finite()
+    }
+
+    /// `self = y + h k`.
+    #[inline(always)]
+    pub(crate) fn set_axpy(&mut self, y: &Self, h: f64, k: &Self) {
+        self.zip2(y, k, |s, y, k| *s = y + h * k);
+    }
+
+    /// `self += a k`.
+    #[inline(always)]
+    pub(crate) fn add_scaled(&mut self, a: f64, k: &Self) {
+        self.zip1(k, |s, k| *s += a * k);
+    }
+
+    /// Which part is non-finite, if any (NaN or ±∞ anywhere).
+    ///
+    /// Multiplying by zero maps finite values to 0 and non-finite ones to NaN, so sums answer
+    /// without a branch per component; the tangents are summed into `N` independent lanes so
+    /// the check vectorises instead of waiting on one long chain of additions.
+    #[inline]
+    pub(crate) fn non_finite_part(&self) -> Option<super::BlowUpPart> {
+        use super::BlowUpPart;
+        let lanes_finite = |lanes: &[f64; N]| lanes.iter().sum::<f64>().is_finite();
+        if !lanes_finite(&self.x.map(|v| v * 0.0)) {
+            return Some(BlowUpPart::State);
+        }
+        let mut lanes = [0.0; N];
+        for r in &self.w {
+            for (l, v) in lanes.iter_mut().zip(r) {
+                *l += v * 0.0;
+            }
+        }
+        if !lanes_finite(&lanes) {
+            return Some(BlowUpPart::Tangent);
+        }
+        if !self.trace_integral.is_finite() {
+            return Some(BlowUpPart::Trace);
+        }
+        None
+    }
+}
+
+/// One stage derivative: `dy = (F, J w, tr J)` at `(t, y)`.
+#[inline(always)]
+pub(crate) fn eval_stage<F, const N: usize, const K: usize>(
+    field: &F,
+    t: f64,
+    y: &VarState<N, K>,
+    trace: bool,
+    dy: &mut VarState<N, K>,
+) where
+    F: super::VectorField<N>,
+{
+    field.eval::<K>(t, &y.x, &y.w, &mut dy.x, &mut dy.w);
+    dy.trace_integral = if trace {
+        field.trace_jacobian(t, &y.x)
+    } else {
+        0.0
+    };
+}

@@ -1,0 +1,65 @@
+//! Statistics of the finite-time exponents: batch-means standard errors and the Kaplan–Yorke
+//! dimension.
+
+/// Standard error of the mean of `samples` (per-interval local exponents, in time order) by
+/// batch means: the last `batches · ⌊n / batches⌋` samples are cut into `batches` consecutive
+/// batches, and the error is the standard deviation of the batch means over √batches.
+///
+/// Local exponents of consecutive intervals are strongly correlated, so the naive σ/√n would
+/// understate the error; batches much longer than the correlation time are nearly independent.
+/// Any leftover samples are dropped from the start (the least converged end). Returns NaN if
+/// fewer than 2 batches of at least one sample are possible.
+pub fn batch_means_stderr(samples: &[f64], batches: usize) -> f64 {
+    if batches < 2 || samples.len() < batches {
+        return f64::NAN;
+    }
+    let m = samples.len() / batches;
+    let used = &samples[samples.len() - m * batches..];
+    let means: Vec<f64> = used
+        .chunks_exact(m)
+        .map(|c| c.iter().sum::<f64>() / m as f64)
+        .collect();
+    let b = batches as f64;
+    let mean = means.iter().sum::<f64>() / b;
+    let var = means.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (b - 1.0);
+    (var / b).sqrt()
+}
+
+/// The Kaplan–Yorke (Lyapunov) dimension D = j + (λ_1 + … + λ_j)/|λ_{j+1}| of a spectrum sorted
+/// in descending order, j the largest index with a non-negative partial sum.
+///
+/// `full` says whether `sorted` is the whole spectrum. D = 0 if λ_1 < 0; if every partial sum
+/// is non-negative, D is the dimension N for a full spectrum (volume is not contracted) and
+/// unknown (`None`) for a partial one, which cannot tell where the sum turns negative.
+pub fn kaplan_yorke(sorted: &[f64], full: bool) -> Option<f64> {
+    let mut sum = 0.0;
+    for (j, &l) in sorted.iter().enumerate() {
+        if sum + l < 0.0 {
+            return Some(j as f64 + sum / l.abs());
+        }
+        sum += l;
+    }
+    full.then_some(sorted.len() as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kaplan_yorke_lorenz() {
+        let d = kaplan_yorke(&[0.9056, 0.0, -14.5723], true).unwrap();
+        assert!((d - (2.0 + 0.9056 / 14.5723)).abs() < 1e-12);
+        assert_eq!(kaplan_yorke(&[-1.0, -2.0], true), Some(0.0));
+        assert_eq!(kaplan_yorke(&[1.0, 0.5], false), None);
+        assert_eq!(kaplan_yorke(&[1.0, -1.0], true), Some(2.0));
+    }
+
+    #[test]
+    fn batch_means_of_constant_is_zero() {
+        assert_eq!(batch_means_stderr(&[2.0; 20], 4), 0.0);
+        let s = batch_means_stderr(&[0.0, 1.0, 0.0, 1.0, 0.0, 3.0], 3);
+        // Batch means 0.5, 0.5, 1.5: sd = 0.57735, / √3.
+        assert!((s - (1.0f64 / 3.0).sqrt() / 3f64.sqrt()).abs() < 1e-12);
+    }
+}
