@@ -1,15 +1,14 @@
 //! `--model NAME | --ir FILE [--params FILE]`: resolving the model a command runs on.
 //!
 //! A shipped model runs as generated code (its concrete type, monomorphised); an IR file runs on
-//! the interpreter, whose sizes are const generics too, so the file's (states, inputs) are
-//! matched against a table of supported sizes.
+//! the interpreter, whose sizes are const generics too, chosen from the file at run time.
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
-use twv_ir::{Interpreted, Ir};
-use twv_model::Model;
+use twv_ir::Ir;
+use twv_model::{Model, ModelVisitor};
 
 /// Which model to run and with which parameters.
 #[derive(Args, Debug, Clone, Default)]
@@ -117,50 +116,20 @@ struct Visit<'a, T> {
     loaded: &'a LoadedModel,
 }
 
-impl<T: ModelTask> twv_generated::Visitor for Visit<'_, T> {
+impl<T: ModelTask> ModelVisitor for Visit<'_, T> {
     type Output = Result<T::Output>;
     fn visit<const NX: usize, const NU: usize, M: Model<NX, NU>>(self, model: M) -> Self::Output {
         self.task.run(&model, self.loaded)
     }
 }
 
-fn interpreted<const NX: usize, const NU: usize, T: ModelTask>(
-    loaded: &LoadedModel,
-    task: T,
-) -> Result<T::Output> {
-    let model = Interpreted::<NX, NU>::new(&loaded.ir, &loaded.params)
-        .with_context(|| loaded.ir.file().to_string())?;
-    task.run(&model, loaded)
-}
-
-/// Sizes an IR file may have: (states, inputs).
-macro_rules! by_size {
-    ($nx:expr, $nu:expr, $loaded:expr, $task:expr; $($x:literal),*) => {
-        match ($nx, $nu) {
-            $(
-                ($x, 0) => interpreted::<$x, 0, T>($loaded, $task),
-                ($x, 1) => interpreted::<$x, 1, T>($loaded, $task),
-                ($x, 2) => interpreted::<$x, 2, T>($loaded, $task),
-            )*
-            (nx, nu) => bail!(
-                "{}: {nx} states and {nu} inputs: the interpreter supports 1 to 10 states and \
-                 0 to 2 inputs",
-                $loaded.ir.file()
-            ),
-        }
-    };
-}
-
-/// Run `task` on the resolved model.
+/// Run `task` on the resolved model: generated code for a shipped model, the interpreter (sizes
+/// chosen at run time, 1 to 10 states and 0 to 2 inputs) for an IR file.
 pub fn dispatch<T: ModelTask>(loaded: &LoadedModel, task: T) -> Result<T::Output> {
+    let visitor = Visit { task, loaded };
     match &loaded.source {
-        Source::Shipped(name) => {
-            twv_generated::visit(name, Some(&loaded.params), Visit { task, loaded })?
-        }
-        Source::File(_) => {
-            let (nx, nu) = (loaded.ir.states().len(), loaded.ir.inputs().len());
-            by_size!(nx, nu, loaded, task; 1, 2, 3, 4, 5, 6, 7, 8, 9, 10)
-        }
+        Source::Shipped(name) => twv_generated::visit(name, Some(&loaded.params), visitor)?,
+        Source::File(_) => twv_ir::visit_interpreted(&loaded.ir, &loaded.params, visitor)?,
     }
 }
 
