@@ -24,13 +24,24 @@ pub trait FeedbackLaw<const NX: usize, const NU: usize> {
 /// `f_jw` gives (∂f/∂x) w, and each tangent vector gets ∂f/∂u (∂k/∂x w) added, which costs one
 /// `jac_u` per stage and 2·NU·NX multiply-adds per vector (cheaper than forming J_cl when
 /// NU < NX).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug)]
 pub struct ClosedLoop<'a, M, L, const NU: usize> {
     /// The model.
     pub model: &'a M,
     /// The feedback law.
     pub law: L,
 }
+
+// By hand: a derive would require `M: Clone`, but only the reference is copied.
+impl<M, L: Clone, const NU: usize> Clone for ClosedLoop<'_, M, L, NU> {
+    fn clone(&self) -> Self {
+        Self {
+            model: self.model,
+            law: self.law.clone(),
+        }
+    }
+}
+impl<M, L: Copy, const NU: usize> Copy for ClosedLoop<'_, M, L, NU> {}
 
 impl<'a, M, L, const NU: usize> ClosedLoop<'a, M, L, NU> {
     /// The model `model` closed by `law`.

@@ -6,13 +6,21 @@ use super::VectorField;
 
 /// ẋ = f(x, u) with a constant input `u` (the study's open-loop runs, and constant external
 /// forces). J = ∂f/∂x comes straight from the model's `f_jw` kernel.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug)]
 pub struct OpenLoop<'a, M, const NU: usize> {
     /// The model.
     pub model: &'a M,
     /// The constant input.
     pub u: [f64; NU],
 }
+
+// By hand: a derive would require `M: Copy`, but only the reference is copied.
+impl<M, const NU: usize> Clone for OpenLoop<'_, M, NU> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<M, const NU: usize> Copy for OpenLoop<'_, M, NU> {}
 
 impl<'a, M, const NU: usize> OpenLoop<'a, M, NU> {
     /// The model `model` driven by the constant input `u`.
