@@ -8,3 +8,4 @@ pub mod integrate;
 pub mod linear;
 pub mod lyapunov;
 pub mod output;
+pub mod plot;

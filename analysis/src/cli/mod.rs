@@ -4,6 +4,7 @@
 pub mod audit;
 pub mod codegen;
 pub mod eval;
+pub mod lyap;
 pub mod model;
 
 use anyhow::Result;
@@ -26,6 +27,8 @@ pub enum Command {
     Codegen(codegen::CodegenArgs),
     /// Audit the generated vehicle models against the independent hand model
     Audit(audit::AuditArgs),
+    /// Lyapunov spectrum (Benettin–QR) with running estimates, errors and Σλ = ⟨tr J⟩
+    Lyap(lyap::LyapArgs),
 }
 
 /// Run one command.
@@ -34,5 +37,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Eval(args) => eval::run(args),
         Command::Codegen(args) => codegen::run(args),
         Command::Audit(args) => audit::run(args),
+        Command::Lyap(args) => lyap::run(args),
     }
 }
