@@ -9,3 +9,4 @@ pub mod linear;
 pub mod lyapunov;
 pub mod output;
 pub mod plot;
+pub mod tune;

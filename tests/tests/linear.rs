@@ -13,6 +13,7 @@ use twv_analysis::linear::{
     CartPendulum, GridOptions, HiddenKind, LinearError, LoopOptions, ModeKind, OperatingPoint,
     PidGains, PitchLoop,
 };
+use twv_analysis::tune::{tune, Objective, Spec, SpecError, TuneError, TuneOptions, TuneStatus};
 use twv_model::{Model, ModelInfo};
 
 const M1: f64 = 115.0;
@@ -358,5 +359,171 @@ fn bad_input_is_a_typed_error() {
     assert!(matches!(
         lqr(&a, &b, &DMatrix::identity(4, 4), &r),
         Err(LinearError::Weight { .. })
+    ));
+}
+
+/// The independent check, redone here from scratch: eigenvalues and dense-grid margins.
+fn check_independently(lp: &PitchLoop, g: &PidGains, opts: &LoopOptions, dpm: f64) {
+    let an = analyse_pitch(lp, g, opts).unwrap();
+    assert!(
+        an.closed_loop.loop_eigenvalues.iter().all(|e| e.re < 0.0),
+        "{g:?}"
+    );
+    assert!(an.margins.stable);
+    assert!(
+        an.margins.disk.phase_deg >= dpm,
+        "{g:?}: {:?}",
+        an.margins.disk
+    );
+}
+
+#[test]
+fn tuned_pd_meets_dpm_45_by_the_independent_check() {
+    let lp = pitch_loop();
+    let cp = paper();
+    let spec: Spec = "dpm>=45".parse().unwrap();
+    let res = tune(&lp, &spec, &TuneOptions::default()).unwrap();
+    assert_eq!(res.status, TuneStatus::Solved, "{res:?}");
+    let cert = res.certificate.as_ref().unwrap();
+    assert!(cert.meets_spec);
+    let g = cert.gains;
+    check_independently(&lp, &g, &LoopOptions::default(), 45.0);
+    assert!(cp.routh_hurwitz_stable(&g));
+    // Minimum-gain design: the margin constraint is active (not far above 45°).
+    let dpm = cert.analysis.margins.disk.phase_deg;
+    assert!(dpm < 45.5, "{dpm}");
+    println!(
+        "tuned PD for dpm>=45 (min gain): Kp = {:.2}, Kd = {:.2}, DPM = {:.4} deg, DGM = {:.4}, \
+         PM = {:.2} deg, {} subproblems",
+        g.kp,
+        g.kd,
+        dpm,
+        cert.analysis.margins.disk.gain_high,
+        cert.analysis.margins.phase_margin_deg,
+        res.iterations
+    );
+
+    // With the study's gains as the target: they already meet it, so they come back.
+    let study = PidGains::pd(3860.0, 1980.0);
+    let opts = TuneOptions {
+        target: Some(study),
+        ..TuneOptions::default()
+    };
+    let res = tune(&lp, &spec, &opts).unwrap();
+    let g = res.certificate.unwrap().gains;
+    assert!(
+        rel(g.kp, study.kp) < 1e-4 && rel(g.kd, study.kd) < 1e-4,
+        "{g:?}"
+    );
+
+    // A target that violates the spec (too little damping) is moved to meet it.
+    let opts = TuneOptions {
+        target: Some(PidGains::pd(3860.0, 400.0)),
+        ..TuneOptions::default()
+    };
+    let res = tune(&lp, &spec, &opts).unwrap();
+    assert_eq!(res.status, TuneStatus::Solved);
+    let g = res.certificate.unwrap().gains;
+    check_independently(&lp, &g, &LoopOptions::default(), 45.0);
+    println!(
+        "nearest to (3860, 400) with dpm>=45: Kp = {:.2}, Kd = {:.2}",
+        g.kp, g.kd
+    );
+}
+
+#[test]
+fn tuned_pid_with_actuator_lag_and_delay_meets_its_spec() {
+    let lp = pitch_loop();
+    let spec: Spec = "dpm>=40,dgm>=6dB".parse().unwrap();
+    let loop_options = LoopOptions {
+        lag: 0.02,
+        delay: 0.01,
+    };
+    let opts = TuneOptions {
+        pid: true,
+        loop_options,
+        ..TuneOptions::default()
+    };
+    let res = tune(&lp, &spec, &opts).unwrap();
+    assert!(
+        matches!(res.status, TuneStatus::Solved | TuneStatus::IterationLimit),
+        "{res:?}"
+    );
+    let cert = res.certificate.unwrap();
+    assert!(cert.meets_spec && cert.gains.ki > 0.0);
+    check_independently(&lp, &cert.gains, &loop_options, 40.0);
+    assert!(cert.analysis.margins.disk.gain_high >= 10f64.powf(6.0 / 20.0) * (1.0 - 1e-9));
+    println!(
+        "tuned PID (lag 20 ms, delay 10 ms, max Ki): {:?}, margins {:?}",
+        cert.gains, cert.analysis.margins.disk
+    );
+}
+
+#[test]
+fn an_impossible_spec_is_reported_infeasible_with_the_best_margin() {
+    let lp = pitch_loop();
+    let spec: Spec = "dpm>=89.9".parse().unwrap();
+    let loop_options = LoopOptions {
+        lag: 0.0,
+        delay: 0.2,
+    };
+    let opts = TuneOptions {
+        loop_options,
+        ..TuneOptions::default()
+    };
+    let res = tune(&lp, &spec, &opts).unwrap();
+    assert_eq!(res.status, TuneStatus::Infeasible);
+    assert!(res.best_fraction < 1.0);
+    if let Some(c) = &res.certificate {
+        let d = c.analysis.margins.disk.phase_deg;
+        assert!(
+            c.analysis.margins.stable && d < 89.9 && d >= 89.9 * res.best_fraction * (1.0 - 1e-9)
+        );
+        println!(
+            "dpm>=89.9 with a 0.2 s delay: infeasible; best found DPM = {d:.3} deg with {:?}",
+            c.gains
+        );
+    }
+}
+
+#[test]
+fn bad_tuner_input_is_a_typed_error() {
+    assert!(matches!(
+        "pm>=45".parse::<Spec>(),
+        Err(SpecError::Unsupported(_))
+    ));
+    assert!(matches!(
+        "dpm>=95".parse::<Spec>(),
+        Err(SpecError::Range { .. })
+    ));
+    assert!(matches!(
+        "dpm>45".parse::<Spec>(),
+        Err(SpecError::Syntax(_))
+    ));
+    assert!(matches!(
+        "dpm>=NaN".parse::<Spec>(),
+        Err(SpecError::Syntax(_))
+    ));
+    let spec: Spec = "dgm>=6dB, ms<=1.5".parse().unwrap();
+    assert_eq!(spec.requirements.len(), 2);
+    let lp = pitch_loop();
+    let bad = TuneOptions {
+        loop_options: LoopOptions {
+            lag: -1.0,
+            delay: 0.0,
+        },
+        ..TuneOptions::default()
+    };
+    assert!(matches!(
+        tune(&lp, &spec, &bad),
+        Err(TuneError::Linear(LinearError::Negative { .. }))
+    ));
+    let bad = TuneOptions {
+        objective: Some(Objective::MaxIntegral),
+        ..TuneOptions::default()
+    };
+    assert!(matches!(
+        tune(&lp, &spec, &bad),
+        Err(TuneError::Option { .. })
     ));
 }

@@ -35,6 +35,11 @@ pub struct GridOptions {
     pub w_max: f64,
     /// Base density before refinement.
     pub points_per_decade: usize,
+    /// Below this |L| the grid is not refined: there a delay spins the phase ever faster
+    /// while nothing can happen (|S − ½| ≈ ½, no gain crossover); only phase crossovers with
+    /// a critical gain above 1/`refine_floor` may go unresolved (reported as an infinite
+    /// margin). 1e-4 (80 dB) by default; a stability-only check can use 0.1.
+    pub refine_floor: f64,
 }
 
 impl GridOptions {
@@ -48,6 +53,7 @@ impl GridOptions {
             w_min: lo * 1e-5,
             w_max: hi * 1e5,
             points_per_decade: 200,
+            refine_floor: 1e-4,
         }
     }
 }
@@ -195,11 +201,6 @@ pub fn loop_margins(
     }
 }
 
-/// Below this |L| the grid is not refined: there a delay spins the phase ever faster while
-/// nothing can happen (|S − ½| ≈ ½, no gain crossover); only phase crossovers with a critical
-/// gain above 1e4 (80 dB) may go unresolved, and are then reported as an infinite margin.
-const NEGLIGIBLE: f64 = 1e-4;
-
 /// The log grid with points inserted wherever L turns by more than 0.25 rad between
 /// neighbours (so crossings are not skipped when a delay spins the phase).
 fn refined_grid(
@@ -217,7 +218,7 @@ fn refined_grid(
         let mut inner = Vec::new();
         while let Some((a, b, depth)) = stack.pop() {
             let turn = (b.1 / a.1).arg().abs();
-            let visible = a.1.norm().max(b.1.norm()) >= NEGLIGIBLE;
+            let visible = a.1.norm().max(b.1.norm()) >= grid.refine_floor;
             if turn > 0.25 && visible && depth < 24 {
                 let w = (a.0 * b.0).sqrt();
                 if let Some(v) = l(w) {

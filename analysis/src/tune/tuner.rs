@@ -1,0 +1,346 @@
+//! `twv tune`: fit PD/PID gains to a margin specification with the convex–concave procedure
+//! of [`super::ccp`], verify them independently ([`super::certificate`]), and when the
+//! specification cannot be met say so, with the best margin found — never a silently relaxed
+//! spec.
+//!
+//! The design grid is coarser than the verification grid, so the design aims a little past the
+//! spec (0.1 %, then 1 %, 10 %, with a denser grid each time) until the independent check
+//! passes. "Infeasible" means phase 1 (slack minimisation) stalled from the start gains; the
+//! procedure is local, so it is an honest "no gains found", and the best achievable margin is
+//! the largest fraction t of the spec (bisection on t, each step warm-started) whose gains
+//! pass the independent check.
+
+use super::ccp::{phase1, phase2, Design, Objective, Phase1, Phase2End};
+use super::certificate::{certify, Certificate};
+use super::spec::Spec;
+use crate::linear::disk::Disk;
+use crate::linear::error::LinearError;
+use crate::linear::margins::{loop_margins, GridOptions};
+use crate::linear::pitch::{LoopOptions, PidGains, PitchLoop};
+
+/// How the tuning ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TuneStatus {
+    /// Gains found and independently verified.
+    Solved,
+    /// Verified gains, but the objective was still improving when the budget ran out.
+    IterationLimit,
+    /// No gains meeting the spec were found; see `best_fraction` and the certificate of the
+    /// best gains.
+    Infeasible,
+    /// Gains met the spec on the design grid but never passed the independent check.
+    Unverified,
+}
+
+/// Tuning settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TuneOptions {
+    /// Tune a PID (Ki free) instead of a PD.
+    pub pid: bool,
+    /// What to optimise; `None`: Target if `target` is given, else MinGain (PD) or
+    /// MaxIntegral (PID).
+    pub objective: Option<Objective>,
+    /// Gains to stay close to (`--target`).
+    pub target: Option<PidGains>,
+    /// Start gains (default: the target, else Kp = s_p, Kd = s_d with the plant's gain scales).
+    pub start: Option<PidGains>,
+    /// Actuator lag and delay in the loop.
+    pub loop_options: LoopOptions,
+    /// Upper bound of each gain as a multiple of its scale (keeps the subproblems bounded).
+    pub max_gain_factor: f64,
+    /// Design-grid density.
+    pub points_per_decade: usize,
+    /// Convex subproblems per phase.
+    pub max_iterations: usize,
+}
+
+impl Default for TuneOptions {
+    fn default() -> Self {
+        Self {
+            pid: false,
+            objective: None,
+            target: None,
+            start: None,
+            loop_options: LoopOptions::default(),
+            max_gain_factor: 100.0,
+            points_per_decade: 40,
+            max_iterations: 60,
+        }
+    }
+}
+
+/// The tuner's answer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TuneResult {
+    /// How it ended.
+    pub status: TuneStatus,
+    /// The spec asked for.
+    pub spec: Spec,
+    /// The independent check of the returned gains (for `Infeasible`, the best gains found;
+    /// `None` if not even a stabilising gain was found).
+    pub certificate: Option<Certificate>,
+    /// 1 when solved; for `Infeasible`, the largest fraction t of the spec met (see
+    /// [`Spec::scaled`]).
+    pub best_fraction: f64,
+    /// Convex subproblems solved in the final phase 2.
+    pub iterations: usize,
+}
+
+/// Bad tuner input.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TuneError {
+    /// Bad loop data (gains, lag, delay, model).
+    #[error(transparent)]
+    Linear(#[from] LinearError),
+    /// A setting out of range.
+    #[error("tuner option {what} is invalid: {why}")]
+    Option {
+        /// Which option.
+        what: &'static str,
+        /// Why.
+        why: &'static str,
+    },
+}
+
+fn disks(spec: &Spec) -> Vec<Disk> {
+    spec.requirements.iter().map(|r| r.disk()).collect()
+}
+
+fn check(options: &TuneOptions) -> Result<Objective, TuneError> {
+    options.loop_options.check()?;
+    for g in [options.target, options.start].iter().flatten() {
+        crate::linear::error::check_finite("gains", [g.kp, g.ki, g.kd].iter())?;
+    }
+    if !(options.max_gain_factor.is_finite() && options.max_gain_factor > 0.0) {
+        return Err(TuneError::Option {
+            what: "max_gain_factor",
+            why: "must be finite and > 0",
+        });
+    }
+    if options.points_per_decade < 2 || options.max_iterations == 0 {
+        return Err(TuneError::Option {
+            what: "points_per_decade/max_iterations",
+            why: "need at least 2 points a decade and 1 iteration",
+        });
+    }
+    let objective = match (options.objective, options.target) {
+        (Some(o), _) => o,
+        (None, Some(t)) => Objective::Target(t),
+        (None, None) if options.pid => Objective::MaxIntegral,
+        (None, None) => Objective::MinGain,
+    };
+    if matches!(objective, Objective::MaxIntegral) && !options.pid {
+        return Err(TuneError::Option {
+            what: "objective",
+            why: "MaxIntegral needs a PID",
+        });
+    }
+    Ok(objective)
+}
+
+/// Tunes the pitch loop `lp` to `spec`.
+pub fn tune(lp: &PitchLoop, spec: &Spec, options: &TuneOptions) -> Result<TuneResult, TuneError> {
+    let objective = check(options)?;
+    let opts = options.loop_options;
+    let design_for = |ppd: usize| {
+        Design::new(lp, &opts, options.pid, ppd, options.max_gain_factor).ok_or(TuneError::Option {
+            what: "model",
+            why: "the plant has a pole at its own reference frequency",
+        })
+    };
+    let mut design = design_for(options.points_per_decade)?;
+    let clamp = |d: &Design, x: Vec<f64>| -> Vec<f64> {
+        x.iter()
+            .zip(d.lower.iter().zip(&d.upper))
+            .map(|(v, (l, u))| v.clamp(*l, *u))
+            .collect()
+    };
+    let x0 = match options.start.or(options.target) {
+        Some(g) => clamp(&design, design.scaled(&g)),
+        None => {
+            // Kp = s_p, Kd = s_d (for the pitch plant 2 M_x g and 2 M_x g/λ: stabilising),
+            // Ki = 0, so the start is a PD even when tuning a PID.
+            let unit = design.gains(&vec![1.0; design.len()]);
+            design.scaled(&PidGains { ki: 0.0, ..unit })
+        }
+    };
+
+    let Some(x0) = stabilising_start(lp, &design, &opts, x0)? else {
+        return Ok(TuneResult {
+            status: TuneStatus::Infeasible,
+            spec: spec.clone(),
+            certificate: None,
+            best_fraction: 0.0,
+            iterations: 0,
+        });
+    };
+    let mut ppd = options.points_per_decade;
+    let mut start = x0.clone();
+    for attempt in 0..4 {
+        let aim = spec.scaled(1.0 + 1e-3 * 10f64.powi(attempt));
+        let floor = disks(&spec.scaled(level(&design, &start, spec) * (1.0 - 1e-3)));
+        match phase1(
+            &design,
+            &start,
+            &disks(&aim),
+            &floor,
+            options.max_iterations,
+        ) {
+            Phase1::Stalled => break,
+            Phase1::Feasible(x) => {
+                let (x, end, iterations) = phase2(
+                    &design,
+                    &x,
+                    &disks(&aim),
+                    &objective,
+                    options.max_iterations,
+                );
+                let cert = certify(lp, &design.gains(&x), &opts, spec)?;
+                if cert.meets_spec {
+                    let status = match end {
+                        Phase2End::Converged | Phase2End::SolverFailed(_) => TuneStatus::Solved,
+                        Phase2End::IterationLimit => TuneStatus::IterationLimit,
+                    };
+                    return Ok(TuneResult {
+                        status,
+                        spec: spec.clone(),
+                        certificate: Some(cert),
+                        best_fraction: 1.0,
+                        iterations,
+                    });
+                }
+                start = x;
+                ppd *= 2;
+                design = design_for(ppd)?;
+                if attempt == 3 {
+                    return Ok(TuneResult {
+                        status: TuneStatus::Unverified,
+                        spec: spec.clone(),
+                        certificate: Some(cert),
+                        best_fraction: 1.0,
+                        iterations,
+                    });
+                }
+            }
+        }
+    }
+    best_achievable(lp, spec, options, &design, x0)
+}
+
+/// Bisection on the fraction t of the spec for the best verified gains.
+fn best_achievable(
+    lp: &PitchLoop,
+    spec: &Spec,
+    options: &TuneOptions,
+    design: &Design,
+    x0: Vec<f64>,
+) -> Result<TuneResult, TuneError> {
+    let opts = options.loop_options;
+    let (mut lo, mut hi) = (0.0, 1.0);
+    let mut best: Option<Certificate> = None;
+    let mut x_best = x0;
+    for _ in 0..14 {
+        let mid = 0.5 * (lo + hi);
+        let aim = spec.scaled(mid * (1.0 + 1e-3));
+        let floor = disks(&spec.scaled(level(design, &x_best, spec) * (1.0 - 1e-3)));
+        let found = match phase1(
+            design,
+            &x_best,
+            &disks(&aim),
+            &floor,
+            options.max_iterations,
+        ) {
+            Phase1::Feasible(x) => {
+                let cert = certify(lp, &design.gains(&x), &opts, &spec.scaled(mid))?;
+                cert.meets_spec.then_some((x, cert))
+            }
+            Phase1::Stalled => None,
+        };
+        match found {
+            Some((x, cert)) => {
+                lo = mid;
+                x_best = x;
+                best = Some(cert);
+            }
+            None => hi = mid,
+        }
+    }
+    Ok(TuneResult {
+        status: TuneStatus::Infeasible,
+        spec: spec.clone(),
+        certificate: best,
+        best_fraction: lo,
+        iterations: 0,
+    })
+}
+
+/// The largest t ∈ [0, 1] for which x keeps L out of the disks of `spec.scaled(t)` on the
+/// design grid (bisection; the disks grow with t).
+fn level(design: &Design, x: &[f64], spec: &Spec) -> f64 {
+    let meets = |t: f64| design.violation(x, &disks(&spec.scaled(t))) <= 0.0;
+    if meets(1.0) {
+        return 1.0;
+    }
+    let (mut lo, mut hi) = (0.0, 1.0);
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if meets(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// Disk margin α of a stable loop on a coarse grid, `None` if unstable (eigenvalues, or the
+/// delay beyond the delay margin). Cheap enough to scan gains with.
+fn coarse_alpha(
+    lp: &PitchLoop,
+    g: &PidGains,
+    opts: &LoopOptions,
+) -> Result<Option<f64>, LinearError> {
+    let closed = lp.closed_loop(g, opts)?;
+    if !closed.stable {
+        return Ok(None);
+    }
+    let scales = crate::linear::report::loop_scales(lp, g, opts, &closed)?;
+    let mut grid = GridOptions::around(&scales);
+    grid.points_per_decade = 20;
+    grid.refine_floor = 0.1;
+    let l0 = |w: f64| lp.loop_delay_free(g, opts.lag, w);
+    let m = loop_margins(&l0, opts.delay, true, &grid);
+    Ok(m.stable.then_some(m.disk.alpha))
+}
+
+/// The start if it stabilises the loop, else the PD gains (Ki = 0) of a 12 × 12 log scan over
+/// [0.03, 30] times the gain scales with the largest disk margin; `None` if none stabilises.
+/// The convex–concave steps keep stability only from a stabilising start.
+fn stabilising_start(
+    lp: &PitchLoop,
+    design: &Design,
+    opts: &LoopOptions,
+    x0: Vec<f64>,
+) -> Result<Option<Vec<f64>>, LinearError> {
+    if coarse_alpha(lp, &design.gains(&x0), opts)?.is_some() {
+        return Ok(Some(x0));
+    }
+    let unit = design.gains(&vec![1.0; design.len()]);
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    for i in 0..12 {
+        for j in 0..12 {
+            let f = |k: i32| 0.03 * 1000f64.powf(f64::from(k) / 11.0);
+            let g = PidGains {
+                kp: unit.kp * f(i),
+                ki: 0.0,
+                kd: unit.kd * f(j),
+            };
+            if let Some(alpha) = coarse_alpha(lp, &g, opts)? {
+                if !best.as_ref().is_some_and(|b| alpha <= b.0) {
+                    best = Some((alpha, design.scaled(&g)));
+                }
+            }
+        }
+    }
+    Ok(best.map(|b| b.1))
+}
