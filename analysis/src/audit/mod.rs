@@ -8,6 +8,7 @@ mod compare;
 mod physics;
 mod report;
 mod sampling;
+mod simulation;
 
 pub use compare::{compare, EntryError, QuantityError};
 pub use physics::{upright_lambda, PhysicsCheck};
@@ -29,6 +30,8 @@ pub struct AuditSettings {
     pub tolerance: f64,
     /// Half-range of the random inputs (N or N m). Default 200.
     pub input_scale: f64,
+    /// Random states simulated for the energy checks (20 s free, 2 s forced). Default 4.
+    pub simulations: usize,
 }
 
 impl Default for AuditSettings {
@@ -38,6 +41,7 @@ impl Default for AuditSettings {
             seed: 2016,
             tolerance: 1e-11,
             input_scale: 200.0,
+            simulations: 4,
         }
     }
 }
@@ -76,5 +80,10 @@ where
         &pts,
     ));
     checks.extend(physics::symmetry(&audited, &pts));
+    checks.extend(simulation::energy_checks(
+        &audited,
+        &pts,
+        settings.simulations,
+    ));
     AuditReport::new(info.name, settings, quantities, checks, &pts)
 }
