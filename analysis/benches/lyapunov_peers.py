@@ -64,17 +64,34 @@ def ir_to_symengine(ir, y, params):
     """f of the IR as symengine expressions of jitcode's y(i), parameters at their defaults."""
     import symengine as se
 
-    unary = {"neg": lambda a: -a, "sq": lambda a: a * a, "twice": lambda a: 2 * a,
-             "inv": lambda a: 1 / a, "sin": se.sin, "cos": se.cos, "sqrt": se.sqrt,
-             "exp": se.exp, "log": se.log, "tan": se.tan}
-    binary = {"add": lambda a, b: a + b, "sub": lambda a, b: a - b, "mul": lambda a, b: a * b,
-              "div": lambda a, b: a / b, "pow": lambda a, b: a**b, "constpow": lambda a, b: a**b}
+    unary = {
+        "neg": lambda a: -a,
+        "sq": lambda a: a * a,
+        "twice": lambda a: 2 * a,
+        "inv": lambda a: 1 / a,
+        "sin": se.sin,
+        "cos": se.cos,
+        "sqrt": se.sqrt,
+        "exp": se.exp,
+        "log": se.log,
+        "tan": se.tan,
+    }
+    binary = {
+        "add": lambda a, b: a + b,
+        "sub": lambda a, b: a - b,
+        "mul": lambda a, b: a * b,
+        "div": lambda a, b: a / b,
+        "pow": lambda a, b: a**b,
+        "constpow": lambda a, b: a**b,
+    }
     fn = ir["functions"]["f"]
     values = []
     for k, op, *rest in fn["instructions"]:
         if op == "input":
             arg, i = rest
-            values.append(y(i) if arg == 0 else se.Float(0.0 if arg == 1 else params[i]))
+            values.append(
+                y(i) if arg == 0 else se.Float(0.0 if arg == 1 else params[i])
+            )
         elif op == "const":
             values.append(se.Float(rest[0]))
         elif op in unary:
@@ -91,9 +108,9 @@ def jitcode_spectrum(x0, t_sample, iterations):
     ir = json.loads(IR.read_text())
     params = [p["default"] for p in ir["params"]]
     f = ir_to_symengine(ir, y, params)
-    ode = jitcode_lyap(f, n_lyap=len(x0), verbose=False)
+    ode = jitcode_lyap(f, n_lyap=len(x0), simplify=False, verbose=False)
     start = time.perf_counter()
-    ode.compile_C(simplify=False, do_cse=True)
+    ode.compile_C()
     compile_time = time.perf_counter() - start
     ode.set_integrator("dopri5", atol=1e-10, rtol=1e-10)
     ode.set_initial_value(np.array(x0, float), 0.0)
@@ -103,26 +120,53 @@ def jitcode_spectrum(x0, t_sample, iterations):
         _, lyaps, _ = ode.integrate(k * t_sample)
         local.append(lyaps)
     elapsed = time.perf_counter() - start
-    spectrum = np.mean(local[1:], axis=0)  # the first interval starts from random vectors
+    spectrum = np.mean(
+        local[1:], axis=0
+    )  # the first interval starts from random vectors
     return np.sort(spectrum)[::-1], elapsed, compile_time
 
 
-def twv_spectrum(x0, repeat):
+def twv_run(x0, *extra):
     exe = ROOT / "target" / "release" / "twv"
-    if not exe.exists():
-        subprocess.run(["cargo", "build", "--release", "--bin", "twv"], cwd=ROOT, check=True)
-    cmd = [str(exe), "lyap", "--model", "vehicle8", "--preset", "paper", "--integrator", "rk4",
-           "--h", "1e-3", "--x0", ",".join(map(str, x0)), "--json", "--timing", str(repeat)]
-    out = json.loads(subprocess.run(cmd, capture_output=True, text=True, check=True).stdout)
+    cmd = [
+        str(exe),
+        "lyap",
+        "--model",
+        "vehicle8",
+        "--preset",
+        "paper",
+        "--integrator",
+        "rk4",
+        "--h",
+        "1e-3",
+        "--x0",
+        ",".join(map(str, x0)),
+        "--json",
+        *extra,
+    ]
+    return json.loads(
+        subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
+    )
+
+
+def twv_spectrum(x0, repeat):
+    out = twv_run(x0, "--timing", str(repeat))
     return np.array(out["exponents"]), out["timing"]["seconds_per_run"]
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--x0", default="0.1,0,0,0,0,0,0,0", help="initial state (vehicle8 order)")
-    ap.add_argument("--repeat", type=int, default=200, help="twv runs averaged for its timing")
+    ap.add_argument(
+        "--x0", default="0.1,0,0,0,0,0,0,0", help="initial state (vehicle8 order)"
+    )
+    ap.add_argument(
+        "--repeat", type=int, default=200, help="twv runs averaged for its timing"
+    )
     args = ap.parse_args()
     x0 = [float(v) for v in args.x0.split(",")]
+    subprocess.run(
+        ["cargo", "build", "--quiet", "--release", "--bin", "twv"], cwd=ROOT, check=True
+    )
     t_sample, iterations, h = 0.1, 100, 1e-3
 
     twv, t_twv = twv_spectrum(x0, args.repeat)
@@ -131,15 +175,35 @@ def main():
     t_numpy = time.perf_counter() - start
     jit, t_jit, t_jit_compile = jitcode_spectrum(x0, t_sample, iterations)
 
-    rows = [("twv (Rust, RK4, identity basis)", twv, t_twv),
-            ("jitcode (dopri5 1e-10, random basis, 1st interval dropped)", jit, t_jit),
-            ("NumPy + CasADi (RK4, identity basis)", numpy_spec, t_numpy)]
+    rows = [
+        ("twv (Rust, RK4, identity basis)", twv, t_twv),
+        ("jitcode (dopri5 1e-10, random basis, 1st interval dropped)", jit, t_jit),
+        ("NumPy + CasADi (RK4, identity basis)", numpy_spec, t_numpy),
+    ]
     print(f"vehicle8, x0 = {x0}, T = {t_sample} s, K = {iterations}, h = {h}")
     for name, spec, secs in rows:
-        print(f"{name}\n  exponents: {np.array2string(spec, precision=4)}\n"
-              f"  sum: {spec.sum():+.6e}   time: {secs * 1e3:.3f} ms   "
-              f"ratio to twv: {secs / t_twv:.0f}x")
+        print(
+            f"{name}\n  exponents: {np.array2string(spec, precision=4)}\n"
+            f"  sum: {spec.sum():+.6e}   time: {secs * 1e3:.3f} ms   "
+            f"ratio to twv: {secs / t_twv:.0f}x"
+        )
     print(f"(jitcode compile time, not counted: {t_jit_compile:.1f} s)")
+    same_window = twv_run(x0, "--transient", "0.1")
+    print(
+        f"sum over jitcode's window [0.1, 10.1] s: twv {same_window['sum']:+.6e} "
+        f"(<tr J> {same_window['mean_trace']:+.6e}), jitcode {jit.sum():+.6e}"
+    )
+    print(
+        "individual finite-time exponents depend on the basis; they converge as T*K grows:"
+    )
+    for iterations in (100, 1000, 10000):
+        for basis in ([], ["--seed", "1"]):
+            out = twv_run(x0, "--iterations", str(iterations), *basis)
+            name = "random (seed 1)" if basis else "identity"
+            print(
+                f"  twv T*K = {iterations * t_sample:>6.0f} s, {name:<15} "
+                f"{np.array2string(np.array(out['exponents']), precision=4)}"
+            )
     return 0
 
 
