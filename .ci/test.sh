@@ -10,8 +10,8 @@ bash .ci/setup-python.sh
 py=.venv/bin/python
 
 step "ruff"
-.venv/bin/ruff check modeling
-.venv/bin/ruff format --check modeling
+.venv/bin/ruff check modeling analysis/benches
+.venv/bin/ruff format --check modeling analysis/benches
 
 step "pytest modeling/"
 "$py" -m pytest -q modeling/tests
