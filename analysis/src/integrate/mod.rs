@@ -7,7 +7,7 @@
 //! - [`VectorField`]: the seam between "what is integrated" and "how". An open-loop model
 //!   ([`OpenLoop`]), a model under a static feedback law ([`ClosedLoop`] with a [`FeedbackLaw`],
 //!   e.g. [`LinearStateFeedback`]), or later a model plus a dynamic controller (an augmented
-//!   state; see [`field`](self::field) for the recipe) are integrated by the same code.
+//!   state; see [`field`] for the recipe) are integrated by the same code.
 //! - [`Rk4`]: the classical fixed-step Runge–Kutta method (the study's setting).
 //! - [`Dopri5`]: the adaptive Dormand–Prince 5(4) pair with its standard continuous extension
 //!   (dense output), optionally with the tangent vectors in the error control.

@@ -36,7 +36,7 @@ impl<const N: usize, const K: usize> VarState<N, K> {
     /// Number of f64 components: x, the tangents, and the quadrature.
     pub const LEN: usize = N + N * K + 1;
 
-    /// All components as one slice, in the order x, w[0], …, w[K−1], trace_integral.
+    /// All components as one slice, in the order `x`, `w[0]`, …, `w[K−1]`, `trace_integral`.
     #[inline(always)]
     pub fn as_slice(&self) -> &[f64] {
         // SAFETY: `repr(C)` with fields [f64; N], [[f64; N]; K], f64: every field has the

@@ -110,7 +110,7 @@ pub struct SignRule {
     pub zero_band: f64,
     /// Largest z·stderr, as a fraction of the scale, that still allows calling an exponent zero.
     pub convergence_tol: f64,
-    /// Averaging horizon [s]: the spectral scale is max(max|λ|, 1/horizon), because a
+    /// Averaging horizon (s): the spectral scale is max(max|λ|, 1/horizon), because a
     /// finite-time exponent cannot resolve rates below ~1/horizon (this keeps an all-zero
     /// spectrum from being judged against its own round-off).
     pub horizon: f64,

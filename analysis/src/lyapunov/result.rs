@@ -15,7 +15,7 @@ use super::Classification;
 /// ([`RunningEstimates::write_csv`]).
 #[derive(Debug, Clone, Serialize)]
 pub struct LyapunovResult {
-    /// The exponents λ_1 ≥ … ≥ λ_K [1/s].
+    /// The exponents λ_1 ≥ … ≥ λ_K (1/s).
     pub exponents: Vec<f64>,
     /// Batch-means standard error of each exponent (same order).
     pub stderr: Vec<f64>,
@@ -29,7 +29,7 @@ pub struct LyapunovResult {
     pub kaplan_yorke: Option<f64>,
     /// The verdict, serialised as its description.
     pub classification: Classification,
-    /// The averaging horizon T·K [s] the exponents are time averages over (the transient is
+    /// The averaging horizon T·K (s) the exponents are time averages over (the transient is
     /// not included; it is in [`RunDetails::t_transient`]).
     pub t_total: f64,
     /// Running estimates at every re-orthonormalisation.
@@ -55,9 +55,9 @@ impl LyapunovResult {
 /// Details of a run that are not part of the summary.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RunDetails {
-    /// Discarded transient [s].
+    /// Discarded transient (s).
     pub t_transient: f64,
-    /// Re-orthonormalisation interval [s].
+    /// Re-orthonormalisation interval (s).
     pub t_sample: f64,
     /// Number of intervals averaged.
     pub intervals: usize,
@@ -87,7 +87,7 @@ pub struct RunDetails {
 pub struct RunningEstimates {
     /// Number of exponents per row.
     pub k: usize,
-    /// Time since the end of the transient [s].
+    /// Time since the end of the transient (s).
     pub t: Vec<f64>,
     /// Row-major values, `k` per time, in the sorted order of the final exponents.
     pub values: Vec<f64>,

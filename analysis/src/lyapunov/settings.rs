@@ -9,9 +9,9 @@ use crate::integrate::DopriOptions;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub enum IntegratorChoice {
-    /// Fixed-step RK4 with step `h` [s] (the study's integrator).
+    /// Fixed-step RK4 with step `h` (s) (the study's integrator).
     Rk4 {
-        /// Step size [s].
+        /// Step size (s).
         h: f64,
     },
     /// Adaptive Dormand–Prince 5(4).
@@ -45,11 +45,11 @@ pub enum InitialBasis {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct LyapunovSettings {
-    /// Re-orthonormalisation (sampling) interval T [s]. Default 0.1, the study's.
+    /// Re-orthonormalisation (sampling) interval T (s). Default 0.1, the study's.
     pub t_sample: f64,
     /// Number of intervals averaged over (the study's K). Default 100, so T·K = 10 s.
     pub iterations: usize,
-    /// Time discarded before averaging [s]. The tangent basis is evolved and re-orthonormalised
+    /// Time discarded before averaging (s). The tangent basis is evolved and re-orthonormalised
     /// during it too, so the average starts from an aligned basis. Default 0.
     pub transient: f64,
     /// The integrator. Default RK4 with h = 10⁻³ s.
@@ -105,7 +105,7 @@ impl LyapunovSettings {
         }
     }
 
-    /// The averaging horizon T·K [s].
+    /// The averaging horizon T·K (s).
     pub fn horizon(&self) -> f64 {
         self.t_sample * self.iterations as f64
     }
