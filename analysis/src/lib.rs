@@ -3,6 +3,7 @@
 
 pub mod audit;
 pub mod cli;
+pub mod control;
 pub mod hand_model;
 pub mod integrate;
 pub mod linear;

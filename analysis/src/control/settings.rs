@@ -1,0 +1,236 @@
+//! What the controller is: the PID pitch loop and the optional outer loops, with defaults beside
+//! each field and a `validate()` that runs before any work.
+
+use serde::{Serialize, Serializer};
+
+use super::error::{check, ControlError};
+use super::reference::Profile;
+use crate::linear::PidGains;
+
+/// The pitch setpoint Φ_ref of the inner loop (before the velocity loop adds its lean).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Setpoint {
+    /// Φ_ref = 0: upright.
+    Zero,
+    /// Φ_ref = c [rad]: a constant lean (the vehicle then accelerates for ever; for a cruise
+    /// use the velocity loop).
+    Constant {
+        /// The lean [rad].
+        value: f64,
+    },
+    /// Φ_ref = A·sin Φ: the study's state-dependent "expectation" 0.03·sin Φ (A = 0.03). It
+    /// feeds back part of Φ itself, so it scales the effective proportional gain by
+    /// (1 − A cos Φ), and its derivative enters the closed-loop Jacobian.
+    Sine {
+        /// The amplitude A.
+        amplitude: f64,
+    },
+}
+
+impl Setpoint {
+    /// The study's 0.03·sin Φ.
+    pub const STUDY: Setpoint = Setpoint::Sine { amplitude: 0.03 };
+
+    /// Φ_ref(Φ) and dΦ_ref/dΦ.
+    #[inline(always)]
+    pub fn eval(&self, phi: f64) -> (f64, f64) {
+        match *self {
+            Setpoint::Zero => (0.0, 0.0),
+            Setpoint::Constant { value } => (value, 0.0),
+            Setpoint::Sine { amplitude } => {
+                let (s, c) = phi.sin_cos();
+                (amplitude * s, amplitude * c)
+            }
+        }
+    }
+
+    /// The angle the loop regulates Φ to at rest (0 unless a constant lean is asked for).
+    pub fn rest_value(&self) -> f64 {
+        match *self {
+            Setpoint::Constant { value } => value,
+            _ => 0.0,
+        }
+    }
+}
+
+/// How the integral state is kept from winding up while the force saturates.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum AntiWindup {
+    /// None: the integral runs on while saturated.
+    None,
+    /// Conditional integration (clamping): the integral stops while the force is saturated and
+    /// the error would drive it further into saturation. Default.
+    #[default]
+    Conditional,
+    /// Back-calculation: ż_I = e + (F − F_cmd)/(Ki T_t); the integral is pulled back towards
+    /// the value that would just reach the limit, with time constant T_t [s].
+    BackCalculation {
+        /// Tracking time T_t [s] (> 0; a common choice is √(Ti·Td) or Td).
+        tracking_time: f64,
+    },
+}
+
+/// The inner loop: F = Kp e + Ki ∫e + Kd Φ̇_f with e = Φ − Φ_ref, saturated to |F| ≤ F_max.
+///
+/// Derivative on the measurement: the rate term uses the measured pitch rate w_y = Φ̇ (a gyro),
+/// never a differentiated error, so setpoint changes cause no derivative kick and no numerical
+/// differentiation is needed. With a filter the rate term is Kd·d, ḋ = (w_y − d)/τ_f, a state.
+///
+/// Sign (DESIGN §2): Φ > 0 is a forward lean and F1 > 0 pushes the base forward, so the base
+/// must push *towards* the lean: F = +Kp Φ + Kd Φ̇ stabilises the upright iff Kd > 0 and
+/// Kp > M_x g (Routh–Hurwitz, [`crate::linear::CartPendulum::routh_hurwitz_stable`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PitchPid {
+    /// Gains (N/rad, N/(rad s), N s/rad). Default the study's PD (3860, 0, 1980).
+    #[serde(serialize_with = "ser_gains")]
+    pub gains: PidGains,
+    /// Setpoint. Default the study's 0.03·sin Φ.
+    pub setpoint: Setpoint,
+    /// Time constant τ_f [s] of a first-order filter on the measured rate; `None` (default):
+    /// no filter.
+    pub derivative_filter: Option<f64>,
+    /// Force limit F_max [N]: |F| ≤ F_max; `None` (default): unlimited.
+    pub saturation: Option<f64>,
+    /// Anti-windup when saturated (only matters with Ki ≠ 0 and a limit). Default conditional.
+    pub anti_windup: AntiWindup,
+}
+
+/// The study's PD gains: Kp = 3860 N/rad, Kd = 1980 N s/rad.
+pub const STUDY_PD: PidGains = PidGains {
+    kp: 3860.0,
+    ki: 0.0,
+    kd: 1980.0,
+};
+
+impl Default for PitchPid {
+    fn default() -> Self {
+        Self {
+            gains: STUDY_PD,
+            setpoint: Setpoint::STUDY,
+            derivative_filter: None,
+            saturation: None,
+            anti_windup: AntiWindup::default(),
+        }
+    }
+}
+
+/// Outer loop on the forward velocity: it leans the pitch setpoint,
+/// Φ_ref += kp (v_ref − v_x) + ki ∫(v_ref − v_x) dt.
+///
+/// A forward lean is what accelerates the vehicle forward (the inner loop has to push the base
+/// under a leaning pendulum), so the lean grows with the velocity shortfall: kp, ki ≥ 0. In
+/// terms of the force this is F ∋ +Kp·kp·v_x, the "positive" velocity feedback every
+/// cart–pendulum regulator has; the linearised loop needs 0 < Kp·kp < m_p l Kd / I_p.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct VelocityLoop {
+    /// Proportional gain [rad per m/s].
+    pub kp: f64,
+    /// Integral gain [rad per m]; 0: no integral state.
+    pub ki: f64,
+    /// Forward-velocity reference v_ref(t) [m/s].
+    pub reference: Profile,
+}
+
+/// Outer loop on the yaw rate: T = kp (r_ref − w_z), on T2 (or as differential wheel torque).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct YawLoop {
+    /// Proportional gain [N m per rad/s] (> 0).
+    pub kp: f64,
+    /// Yaw-rate reference r_ref(t) [rad/s].
+    pub reference: Profile,
+}
+
+/// The whole controller. Default: the study's PD with its 0.03·sin Φ setpoint, no outer loops.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct ControllerSettings {
+    /// The pitch loop.
+    pub pitch: PitchPid,
+    /// Optional forward-velocity loop (drift regulation, maneuvers).
+    pub velocity: Option<VelocityLoop>,
+    /// Optional yaw-rate loop.
+    pub yaw: Option<YawLoop>,
+}
+
+fn ser_gains<S: Serializer>(g: &PidGains, s: S) -> Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct Gains {
+        kp: f64,
+        ki: f64,
+        kd: f64,
+    }
+    Gains {
+        kp: g.kp,
+        ki: g.ki,
+        kd: g.kd,
+    }
+    .serialize(s)
+}
+
+impl ControllerSettings {
+    /// A PID pitch loop with these gains and the study's setpoint, nothing else.
+    pub fn pid(gains: PidGains) -> Self {
+        Self {
+            pitch: PitchPid {
+                gains,
+                ..PitchPid::default()
+            },
+            ..Self::default()
+        }
+    }
+
+    /// Checks every setting; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ControlError> {
+        let p = &self.pitch;
+        let g = &p.gains;
+        check("Kp", g.kp, true, "must be finite")?;
+        check("Ki", g.ki, g.ki >= 0.0, "must be finite and ≥ 0")?;
+        check("Kd", g.kd, true, "must be finite")?;
+        match p.setpoint {
+            Setpoint::Zero => {}
+            Setpoint::Constant { value } => check("setpoint", value, true, "must be finite")?,
+            Setpoint::Sine { amplitude } => check(
+                "setpoint amplitude",
+                amplitude,
+                amplitude.abs() < 1.0,
+                "must be finite with |A| < 1",
+            )?,
+        }
+        if let Some(tau) = p.derivative_filter {
+            check(
+                "derivative filter τ_f [s]",
+                tau,
+                tau > 0.0,
+                "must be finite and > 0",
+            )?;
+        }
+        if let Some(f) = p.saturation {
+            check("F_max [N]", f, f > 0.0, "must be finite and > 0")?;
+        }
+        if let AntiWindup::BackCalculation { tracking_time } = p.anti_windup {
+            check(
+                "back-calculation tracking time [s]",
+                tracking_time,
+                tracking_time > 0.0,
+                "must be finite and > 0",
+            )?;
+        }
+        if let Some(v) = &self.velocity {
+            check("velocity kp", v.kp, v.kp >= 0.0, "must be finite and ≥ 0")?;
+            check("velocity ki", v.ki, v.ki >= 0.0, "must be finite and ≥ 0")?;
+        }
+        if let Some(y) = &self.yaw {
+            check("yaw kp", y.kp, y.kp > 0.0, "must be finite and > 0")?;
+        }
+        Ok(())
+    }
+
+    /// Number of controller states: ∫e if Ki ≠ 0, the rate filter, ∫(v_ref − v_x) if the
+    /// velocity loop has ki ≠ 0.
+    pub fn n_states(&self) -> usize {
+        usize::from(self.pitch.gains.ki != 0.0)
+            + usize::from(self.pitch.derivative_filter.is_some())
+            + usize::from(self.velocity.as_ref().is_some_and(|v| v.ki != 0.0))
+    }
+}

@@ -1,0 +1,153 @@
+//! Running a vector field over a time span and keeping samples: the closed-loop and open-loop
+//! simulations behind `twv sim`, `twv phase` and `twv disturb`.
+
+use serde::Serialize;
+
+use super::error::ControlError;
+use crate::integrate::{Dopri5, Rk4, Stepper, VectorField};
+use crate::lyapunov::IntegratorChoice;
+
+/// How long and how finely to run. Defaults are beside each field.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RunSettings {
+    /// End time [s]. Default 10.
+    pub t_end: f64,
+    /// Output interval [s] (samples at 0, Δ, 2Δ, …, t_end). Default 0.01.
+    pub sample: f64,
+    /// The integrator. Default RK4 with h = 10⁻³ s (the study's).
+    pub integrator: IntegratorChoice,
+    /// Stop when |Φ| exceeds this [rad] at a sample: the vehicle fell over (the model itself has
+    /// no ground). Default π/2; `None` runs on.
+    pub fall_angle: Option<f64>,
+}
+
+impl Default for RunSettings {
+    fn default() -> Self {
+        Self {
+            t_end: 10.0,
+            sample: 0.01,
+            integrator: IntegratorChoice::default(),
+            fall_angle: Some(std::f64::consts::FRAC_PI_2),
+        }
+    }
+}
+
+impl RunSettings {
+    /// Checks the span, sampling and fall angle.
+    pub fn validate(&self) -> Result<(), ControlError> {
+        use super::error::check;
+        check(
+            "t_end [s]",
+            self.t_end,
+            self.t_end > 0.0,
+            "must be finite and > 0",
+        )?;
+        check(
+            "sample interval [s]",
+            self.sample,
+            self.sample > 0.0 && self.sample <= self.t_end,
+            "must be finite, > 0 and ≤ t_end",
+        )?;
+        if let Some(a) = self.fall_angle {
+            check("fall angle [rad]", a, a > 0.0, "must be > 0")?;
+        }
+        Ok(())
+    }
+}
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum RunEnd {
+    /// Reached t_end.
+    Completed,
+    /// |Φ| passed the fall angle at the sample time `t`.
+    Fell {
+        /// Time of the first sample past the fall angle [s].
+        t: f64,
+        /// Φ there [rad].
+        phi: f64,
+    },
+}
+
+/// Samples of one run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trajectory<const N: usize> {
+    /// Sample times [s].
+    pub t: Vec<f64>,
+    /// States at the sample times.
+    pub x: Vec<[f64; N]>,
+    /// How the run ended.
+    pub end: RunEnd,
+}
+
+impl<const N: usize> Trajectory<N> {
+    /// Component `i` over time.
+    pub fn component(&self, i: usize) -> Vec<f64> {
+        self.x.iter().map(|x| x[i]).collect()
+    }
+
+    /// The last state.
+    pub fn last(&self) -> &[f64; N] {
+        self.x.last().expect("a trajectory holds its initial state")
+    }
+}
+
+/// Integrates `field` from `x0` at t = 0 and samples it every `run.sample` seconds; `phi` is the
+/// index of Φ for the fall check. A blow-up is an error naming the time and the state.
+pub fn simulate<F, const N: usize>(
+    field: F,
+    x0: &[f64; N],
+    phi: usize,
+    run: &RunSettings,
+) -> Result<Trajectory<N>, ControlError>
+where
+    F: VectorField<N>,
+{
+    run.validate()?;
+    if phi >= N {
+        return Err(ControlError::InvalidRun(format!(
+            "pitch index {phi} outside the {N}-state vector"
+        )));
+    }
+    match run.integrator {
+        IntegratorChoice::Rk4 { h } => sample(Rk4::new(field, 0.0, *x0, [], h, false)?, phi, run),
+        IntegratorChoice::Dopri(opts) => {
+            sample(Dopri5::new(field, 0.0, *x0, [], opts, false)?, phi, run)
+        }
+    }
+}
+
+fn sample<S: Stepper<N, 0>, const N: usize>(
+    mut stepper: S,
+    phi: usize,
+    run: &RunSettings,
+) -> Result<Trajectory<N>, ControlError> {
+    // Sample i at i·Δ (not an accumulated sum), the last exactly at t_end.
+    let n = (run.t_end / run.sample * (1.0 - 1e-12)).ceil() as usize;
+    let mut traj = Trajectory {
+        t: Vec::with_capacity(n + 1),
+        x: Vec::with_capacity(n + 1),
+        end: RunEnd::Completed,
+    };
+    traj.t.push(stepper.t());
+    traj.x.push(stepper.state().x);
+    for i in 1..=n {
+        let t = if i == n {
+            run.t_end
+        } else {
+            i as f64 * run.sample
+        };
+        stepper.advance_to(t)?;
+        let x = stepper.state().x;
+        traj.t.push(t);
+        traj.x.push(x);
+        if let Some(limit) = run.fall_angle {
+            if x[phi].abs() > limit {
+                traj.end = RunEnd::Fell { t, phi: x[phi] };
+                break;
+            }
+        }
+    }
+    Ok(traj)
+}
