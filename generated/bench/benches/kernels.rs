@@ -1,0 +1,130 @@
+//! `cargo bench -p twv-bench`: the generated vehicle8 kernels against CasADi's own generated C
+//! (gcc -O3, built by this crate's build script), timed side by side in the same run.
+//!
+//! A hand-written harness instead of criterion/divan: six paired measurements need no
+//! statistics framework, and the workspace builds (clippy, tests) stay free of its dependencies.
+//! A benchmark, not a test: it prints numbers and asserts no time.
+
+use std::hint::black_box;
+use std::process::ExitCode;
+
+use twv_bench::{compare, gate, time, Casadi, Pair, Plan, Point, Twv, K, NNZ, NX};
+use twv_generated::{baked, Vehicle8};
+
+/// One row of the table: twv and CasADi's C for one function and parameter mode.
+fn measure(plan: Plan, function: &str, twv: &impl Twv, c: &Casadi, pt: &Point) -> Pair {
+    match function {
+        "f" => compare(
+            plan,
+            || {
+                let mut out = [0.0; NX];
+                black_box(twv).f(black_box(&pt.x), black_box(&pt.u), &mut out);
+                black_box(&mut out);
+            },
+            || {
+                let mut out = [0.0; NX];
+                black_box(c).f(black_box(&pt.x), black_box(&pt.u), &mut out);
+                black_box(&mut out);
+            },
+        ),
+        "f+jac_x" => compare(
+            plan,
+            || {
+                let mut f = [0.0; NX];
+                let mut j = black_box(twv).f_jac_x(black_box(&pt.x), black_box(&pt.u), &mut f);
+                black_box((&mut f, &mut j));
+            },
+            || {
+                let (mut f, mut j) = ([0.0; NX], [0.0; NNZ]);
+                black_box(c).f_jac_x(black_box(&pt.x), black_box(&pt.u), &mut f, &mut j);
+                black_box((&mut f, &mut j));
+            },
+        ),
+        _ => compare(
+            plan,
+            || {
+                let (mut f, mut out) = ([0.0; NX], [[0.0; NX]; K]);
+                black_box(twv).f_jw::<K>(
+                    black_box(&pt.x),
+                    black_box(&pt.u),
+                    black_box(&pt.w),
+                    &mut f,
+                    &mut out,
+                );
+                black_box((&mut f, &mut out));
+            },
+            || {
+                let (mut f, mut out) = ([0.0; NX], [[0.0; NX]; K]);
+                black_box(c).f_jw8(
+                    black_box(&pt.x),
+                    black_box(&pt.u),
+                    black_box(&pt.w),
+                    &mut f,
+                    &mut out,
+                );
+                black_box((&mut f, &mut out));
+            },
+        ),
+    }
+}
+
+fn main() -> ExitCode {
+    // `cargo bench` passes `--bench`; `cargo test --benches` passes no `--bench` and only
+    // wants to know that the target runs: then check correctness and stop.
+    let timing = std::env::args().any(|a| a == "--bench");
+    if let Err(e) = gate(1000) {
+        eprintln!("twv-bench: the Rust kernels and CasADi's C disagree, nothing timed:\n{e}");
+        return ExitCode::FAILURE;
+    }
+    println!("correctness gate passed: f and jac_x bit for bit, J·W within 1e-13 (1001 points)");
+    if !timing {
+        return ExitCode::SUCCESS;
+    }
+
+    let plan = match Plan::from_env() {
+        Ok(plan) => plan,
+        Err(e) => {
+            eprintln!("twv-bench: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let pt = Point::bench();
+    let runtime = Vehicle8::with_defaults();
+    let (c_runtime, c_baked) = match (Casadi::runtime(Vehicle8::DEFAULTS), Casadi::baked()) {
+        (Ok(r), Ok(b)) => (r, b),
+        (Err(e), _) | (_, Err(e)) => {
+            eprintln!("twv-bench: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    println!(
+        "vehicle8, {} samples of >= {} ms per function, paired (twv, C) samples; \
+         ns per call: median ±half the interquartile range",
+        plan.samples,
+        plan.sample_time.as_millis()
+    );
+    println!();
+    println!("| function | params | twv ns | CasADi C ns | ratio (twv/C) |");
+    println!("|---|---|---:|---:|---:|");
+    for function in ["f", "f+jac_x", "f_jw (K=8)"] {
+        for params in ["runtime", "baked"] {
+            let pair = match params {
+                "runtime" => measure(plan, function, &runtime, &c_runtime, &pt),
+                _ => measure(plan, function, &baked::Vehicle8, &c_baked, &pt),
+            };
+            println!(
+                "| {function} | {params} | {} | {} | {:.2} |",
+                pair.twv, pair.c, pair.ratio.median
+            );
+        }
+    }
+    // The floor both sides share: each f and f+jac_x of vehicle8 makes two libm sincos calls
+    // (LLVM and gcc both merge sin and cos of one angle), identical on both sides.
+    let sincos = time(plan, || {
+        let (s, c) = black_box(pt.x[0]).sin_cos();
+        black_box((s, c));
+    });
+    println!();
+    println!("reference: one libm sincos call {sincos} ns");
+    ExitCode::SUCCESS
+}
