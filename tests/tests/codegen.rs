@@ -301,6 +301,23 @@ fn sparse_and_jw_match_dense<const NX: usize, const NU: usize>(
             jw.as_flattened(),
             &format!("{what} jw"),
         );
+        // The fused kernel's trace is the dense Jacobian's diagonal sum, and its f and J·W are
+        // those of f_jw.
+        let (mut f_tr, mut jw_tr) = ([0.0; NX], [[0.0; NX]; 8]);
+        let trace = model.f_jw_trace(&x, &u, &w, &mut f_tr, &mut jw_tr);
+        let dense_trace: f64 = (0..NX).map(|i| dense[i][i]).sum();
+        assert_close(
+            &[trace],
+            &[dense_trace],
+            1e-15,
+            &format!("{what} f_jw_trace trace"),
+        );
+        assert_bits(&f_tr, &f, &format!("{what} f_jw_trace f"));
+        assert_bits(
+            jw_tr.as_flattened(),
+            jw.as_flattened(),
+            &format!("{what} f_jw_trace J·W"),
+        );
     }
 }
 

@@ -42,6 +42,22 @@ pub trait VectorField<const N: usize> {
         jw: &mut [[f64; N]; K],
     );
 
+    /// [`eval`](Self::eval) that also returns tr J(t, x), for the ∫ tr J quadrature. The
+    /// default adds [`trace_jacobian`](Self::trace_jacobian); fields whose model computes the
+    /// Jacobian anyway (generated code) override it to get the trace for free.
+    #[inline]
+    fn eval_trace<const K: usize>(
+        &self,
+        t: f64,
+        x: &[f64; N],
+        w: &[[f64; N]; K],
+        f: &mut [f64; N],
+        jw: &mut [[f64; N]; K],
+    ) -> f64 {
+        self.eval(t, x, w, f, jw);
+        self.trace_jacobian(t, x)
+    }
+
     /// ẋ = F(t, x) alone.
     #[inline]
     fn rhs(&self, t: f64, x: &[f64; N], f: &mut [f64; N]) {
@@ -88,6 +104,18 @@ impl<const N: usize, F: VectorField<N> + ?Sized> VectorField<N> for &F {
         jw: &mut [[f64; N]; K],
     ) {
         (**self).eval(t, x, w, f, jw);
+    }
+
+    #[inline(always)]
+    fn eval_trace<const K: usize>(
+        &self,
+        t: f64,
+        x: &[f64; N],
+        w: &[[f64; N]; K],
+        f: &mut [f64; N],
+        jw: &mut [[f64; N]; K],
+    ) -> f64 {
+        (**self).eval_trace(t, x, w, f, jw)
     }
 
     #[inline(always)]

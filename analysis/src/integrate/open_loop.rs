@@ -46,6 +46,18 @@ where
     }
 
     #[inline(always)]
+    fn eval_trace<const K: usize>(
+        &self,
+        _t: f64,
+        x: &[f64; NX],
+        w: &[[f64; NX]; K],
+        f: &mut [f64; NX],
+        jw: &mut [[f64; NX]; K],
+    ) -> f64 {
+        self.model.f_jw_trace(x, &self.u, w, f, jw)
+    }
+
+    #[inline(always)]
     fn rhs(&self, _t: f64, x: &[f64; NX], f: &mut [f64; NX]) {
         self.model.f(x, &self.u, f);
     }

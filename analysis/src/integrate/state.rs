@@ -175,10 +175,10 @@ pub(crate) fn eval_stage<F, const N: usize, const K: usize>(
 ) where
     F: super::VectorField<N>,
 {
-    field.eval::<K>(t, &y.x, &y.w, &mut dy.x, &mut dy.w);
     dy.trace_integral = if trace {
-        field.trace_jacobian(t, &y.x)
+        field.eval_trace::<K>(t, &y.x, &y.w, &mut dy.x, &mut dy.w)
     } else {
+        field.eval::<K>(t, &y.x, &y.w, &mut dy.x, &mut dy.w);
         0.0
     };
 }

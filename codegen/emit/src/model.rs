@@ -312,6 +312,7 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
     let jac = p.output("jac_x", "jac_x")?;
     let jx_dense = dense_from_stored(jac);
     let jw = jw_rows(jac);
+    let trace = trace_from_stored(jac);
     let allow = allow();
     Ok(quote! {
         #allow
@@ -362,8 +363,42 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                     *ok = [#(#jw),*];
                 }
             }
+
+            #[inline]
+            fn f_jw_trace<const K: usize>(
+                &self,
+                x: &[f64; #nx],
+                u: &[f64; #nu],
+                w: &[[f64; #nx]; K],
+                f: &mut [f64; #nx],
+                out: &mut [[f64; #nx]; K],
+            ) -> f64 {
+                let j = self.kernel_f_jac_x(x, u, f);
+                for (wk, ok) in w.iter().zip(out.iter_mut()) {
+                    *ok = [#(#jw),*];
+                }
+                #trace
+            }
         }
     })
+}
+
+/// tr(∂f/∂x) as the sum of the stored diagonal entries `j[e]` (0.0 if none is stored).
+fn trace_from_stored(jac: &Output) -> TokenStream {
+    let diagonal: Vec<TokenStream> = jac
+        .entries()
+        .enumerate()
+        .filter(|(_, (r, c, _))| r == c)
+        .map(|(e, _)| {
+            let e = index(e);
+            quote!(j[#e])
+        })
+        .collect();
+    if diagonal.is_empty() {
+        quote!(0.0)
+    } else {
+        quote!(0.0 #(+ #diagonal)*)
+    }
 }
 
 /// The dense ∂f/∂x, row-major, from the stored entries `j` (`j[e]` or `0.0`).

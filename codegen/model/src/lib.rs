@@ -84,6 +84,23 @@ pub trait Model<const NX: usize, const NU: usize> {
         out: &mut [[f64; NX]; K],
     );
 
+    /// [`f_jw`](Self::f_jw) that also returns tr(∂f/∂x), for the Σλ = ⟨tr J⟩ check of the
+    /// Lyapunov code. The default evaluates the dense Jacobian a second time; generated code
+    /// overrides it with the sum of the diagonal entries it has already computed.
+    fn f_jw_trace<const K: usize>(
+        &self,
+        x: &[f64; NX],
+        u: &[f64; NU],
+        w: &[[f64; NX]; K],
+        f: &mut [f64; NX],
+        out: &mut [[f64; NX]; K],
+    ) -> f64 {
+        self.f_jw(x, u, w, f, out);
+        let mut jac = [[0.0; NX]; NX];
+        self.jac_x(x, u, &mut jac);
+        (0..NX).map(|i| jac[i][i]).sum()
+    }
+
     /// `out[k] = (∂f/∂x) w[k]` without ẋ.
     fn jw<const K: usize>(
         &self,
