@@ -3,9 +3,12 @@
 
 pub mod audit;
 pub mod codegen;
+pub mod control_args;
+pub mod disturb;
 pub mod eval;
 pub mod lyap;
 pub mod model;
+pub mod sim;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -29,6 +32,11 @@ pub enum Command {
     Audit(audit::AuditArgs),
     /// Lyapunov spectrum (Benettin–QR) with running estimates, errors and Σλ = ⟨tr J⟩
     Lyap(lyap::LyapArgs),
+    /// Closed-loop run of the PID pitch controller (tilt recovery or a maneuver): CSV, figures,
+    /// metrics
+    Sim(sim::SimArgs),
+    /// Recovery from a forward or backward tilt under the study's PD (its Figs. 5 and 6)
+    Disturb(disturb::DisturbArgs),
 }
 
 /// Run one command.
@@ -38,5 +46,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Codegen(args) => codegen::run(args),
         Command::Audit(args) => audit::run(args),
         Command::Lyap(args) => lyap::run(args),
+        Command::Sim(args) => sim::run(args),
+        Command::Disturb(args) => disturb::run(args),
     }
 }
