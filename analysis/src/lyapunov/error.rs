@@ -48,10 +48,10 @@ pub enum SettingsError {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LyapunovError {
     /// Invalid settings.
-    #[error("invalid Lyapunov settings: {0}")]
+    #[error("invalid Lyapunov settings")]
     Settings(#[from] SettingsError),
     /// The integration failed (blow-up, step-size underflow).
-    #[error("integration failed: {0}")]
+    #[error("integration failed")]
     Integrate(#[from] IntegrateError),
     /// K must be between 1 and N.
     #[error("{k} exponents requested for a {n}-dimensional system: need 1 ≤ k ≤ n")]
