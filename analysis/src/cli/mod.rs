@@ -8,6 +8,7 @@ pub mod disturb;
 pub mod eval;
 pub mod lyap;
 pub mod model;
+pub mod phase;
 pub mod sim;
 
 use anyhow::Result;
@@ -37,6 +38,9 @@ pub enum Command {
     Sim(sim::SimArgs),
     /// Recovery from a forward or backward tilt under the study's PD (its Figs. 5 and 6)
     Disturb(disturb::DisturbArgs),
+    /// Phase portraits (Φ, Φ̇) for several gain sets side by side (the study's Fig. 4), or open
+    /// loop under constant forces
+    Phase(phase::PhaseArgs),
 }
 
 /// Run one command.
@@ -48,5 +52,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Lyap(args) => lyap::run(args),
         Command::Sim(args) => sim::run(args),
         Command::Disturb(args) => disturb::run(args),
+        Command::Phase(args) => phase::run(args),
     }
 }

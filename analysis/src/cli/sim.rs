@@ -366,7 +366,7 @@ pub fn summary(out: &SimOutput) -> String {
         out.title, out.model, out.params, out.run.t_end
     );
     if let RunEnd::Fell { t, phi } = out.end {
-        s += &format!("  FELL OVER at t = {t} s (Φ = {phi:.3} rad)\n");
+        s += &format!("  FELL OVER at t = {t:.3} s (Φ = {phi:.3} rad)\n");
     }
     s += &format!(
         "  Φ: settling (2 %) {}, overshoot {}, IAE {:.4} rad s, ISE {:.4e} rad² s, final {:+.3e} rad\n",
