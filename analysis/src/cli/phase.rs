@@ -169,14 +169,14 @@ impl ControlTask for PhaseTask<'_> {
                 let field = PidLoop::<_, NX, NU, NA>::new(model, settings, p)?;
                 let aug: Vec<[f64; NA]> = starts.iter().map(|x| field.initial_state(x)).collect();
                 let abscissa = loop_abscissa(&field, &[0.0; NA])?;
-                let runs = runs(&field, &aug, phi, w_y, self.run)?;
+                let runs = runs(field, &aug, phi, w_y, self.run)?;
                 Ok((Some(settings.clone()), None, abscissa, runs))
             }
             Drive::Open(text) => {
                 let u: [f64; NU] = to_array(&parse_vector("force", text, info.inputs)?);
                 let field = OpenLoop::new(model, u);
                 let abscissa = loop_abscissa(&field, &[0.0; NX])?;
-                let runs = runs(&field, &starts, phi, w_y, self.run)?;
+                let runs = runs(field, &starts, phi, w_y, self.run)?;
                 Ok((None, Some(u.to_vec()), abscissa, runs))
             }
         }
