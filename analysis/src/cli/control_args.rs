@@ -164,6 +164,19 @@ fn parse_setpoint(text: &str) -> Result<Setpoint> {
 }
 
 impl ControllerArgs {
+    /// Whether any controller option was given (an open-loop command must not ignore them).
+    pub fn any(&self) -> bool {
+        self.setpoint.is_some()
+            || self.rate_filter.is_some()
+            || self.f_max.is_some()
+            || self.anti_windup.is_some()
+            || self.tracking_time.is_some()
+            || self.v_loop.is_some()
+            || self.v_ref.is_some()
+            || self.yaw_kp.is_some()
+            || self.yaw_ref.is_some()
+    }
+
     /// The validated controller with `gains`; `velocity` overrides the velocity loop's
     /// reference (the maneuver scenario), `default_v_loop` its gains when `--v-loop` is absent.
     pub fn settings(

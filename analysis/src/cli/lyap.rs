@@ -9,8 +9,10 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 use twv_model::Model;
 
+use super::control_args::{dispatch_control, parse_gains, plant, ControlTask, ControllerArgs};
 use super::model::{dispatch, parse_vector, to_array, LoadedModel, ModelArgs, ModelTask};
-use crate::integrate::{DopriOptions, OpenLoop};
+use crate::control::{ControllerSettings, PidLoop};
+use crate::integrate::{DopriOptions, OpenLoop, VectorField};
 use crate::lyapunov::{
     lyapunov_spectrum, InitialBasis, IntegratorChoice, LyapunovResult, LyapunovSettings,
 };
@@ -40,8 +42,21 @@ pub struct LyapArgs {
     #[arg(long, value_name = "V1,V2,...", allow_hyphen_values = true)]
     pub x0: String,
     /// Constant input, comma-separated (N, N m) [default: zeros]
-    #[arg(long, value_name = "U1,...", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "U1,...",
+        allow_hyphen_values = true,
+        conflicts_with = "gains"
+    )]
     pub u: Option<String>,
+    /// Closed loop: PID pitch gains Kp,Ki,Kd [N/rad, N/(rad s), N s/rad]; the spectrum is then
+    /// that of the augmented system (model states, then controller states, which start at 0)
+    /// [default: open loop]
+    #[arg(long, value_name = "KP,KI,KD")]
+    pub gains: Option<String>,
+    /// Controller options (with --gains)
+    #[command(flatten)]
+    pub controller: ControllerArgs,
     /// Start from a preset; the options below override it
     #[arg(long, value_enum)]
     pub preset: Option<Preset>,
@@ -129,6 +144,9 @@ pub struct LyapOutput {
     pub x0: Vec<f64>,
     pub u: Vec<f64>,
     pub settings: LyapunovSettings,
+    /// The controller of a closed-loop spectrum (`x0` then includes its states).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub controller: Option<ControllerSettings>,
     #[serde(flatten)]
     pub result: LyapunovResult,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -147,22 +165,46 @@ struct Lyap<'a> {
 }
 
 /// The spectrum with the const number of exponents `K` chosen at run time.
-fn spectrum<const NX: usize, const NU: usize, M: Model<NX, NU>>(
-    model: &M,
-    x0: &[f64; NX],
-    u: [f64; NU],
+fn spectrum<F: VectorField<N>, const N: usize>(
+    field: &F,
+    x0: &[f64; N],
     k: usize,
     settings: &LyapunovSettings,
 ) -> Result<LyapunovResult> {
-    let field = OpenLoop::new(model, u);
     let result = match k {
-        1 => lyapunov_spectrum::<_, NX, 1>(&field, x0, settings)?,
-        2 => lyapunov_spectrum::<_, NX, 2>(&field, x0, settings)?,
-        3 => lyapunov_spectrum::<_, NX, 3>(&field, x0, settings)?,
-        k if k == NX => lyapunov_spectrum::<_, NX, NX>(&field, x0, settings)?,
-        k => bail!("--k {k}: choose 1, 2, 3 or {NX} (the full spectrum)"),
+        1 => lyapunov_spectrum::<_, N, 1>(field, x0, settings)?,
+        2 => lyapunov_spectrum::<_, N, 2>(field, x0, settings)?,
+        3 => lyapunov_spectrum::<_, N, 3>(field, x0, settings)?,
+        k if k == N => lyapunov_spectrum::<_, N, N>(field, x0, settings)?,
+        k => bail!("--k {k}: choose 1, 2, 3 or {N} (the full spectrum)"),
     };
     Ok(result)
+}
+
+/// The spectrum, repeated `--timing` times for the wall time per run.
+fn timed_spectrum<F: VectorField<N>, const N: usize>(
+    args: &LyapArgs,
+    field: &F,
+    x0: &[f64; N],
+    settings: &LyapunovSettings,
+) -> Result<(LyapunovResult, Option<Timing>)> {
+    let k = args.k.unwrap_or(N);
+    let mut result = spectrum(field, x0, k, settings)?;
+    let timing = match args.timing {
+        Some(0) => bail!("--timing needs at least one run"),
+        Some(runs) => {
+            let start = Instant::now();
+            for _ in 0..runs {
+                result = spectrum(field, x0, k, settings)?;
+            }
+            Some(Timing {
+                runs,
+                seconds_per_run: start.elapsed().as_secs_f64() / runs as f64,
+            })
+        }
+        None => None,
+    };
+    Ok((result, timing))
 }
 
 impl ModelTask for Lyap<'_> {
@@ -178,28 +220,47 @@ impl ModelTask for Lyap<'_> {
             Some(text) => to_array(&parse_vector("u", text, info.inputs)?),
             None => [0.0; NU],
         };
-        let k = self.args.k.unwrap_or(NX);
-        let mut result = spectrum(model, &x0, u, k, &self.settings)?;
-        let timing = match self.args.timing {
-            Some(0) => bail!("--timing needs at least one run"),
-            Some(runs) => {
-                let start = Instant::now();
-                for _ in 0..runs {
-                    result = spectrum(model, &x0, u, k, &self.settings)?;
-                }
-                Some(Timing {
-                    runs,
-                    seconds_per_run: start.elapsed().as_secs_f64() / runs as f64,
-                })
-            }
-            None => None,
-        };
+        let field = OpenLoop::new(model, u);
+        let (result, timing) = timed_spectrum(self.args, &field, &x0, &self.settings)?;
         Ok(LyapOutput {
             model: loaded.name().to_string(),
             params: loaded.params_origin.clone(),
             x0: x0.to_vec(),
             u: u.to_vec(),
             settings: self.settings,
+            controller: None,
+            result,
+            timing,
+        })
+    }
+}
+
+/// The closed-loop branch: the same spectrum of the model under the PID controller, an
+/// augmented field on NA = NX + (controller states).
+struct ClosedLyap<'a> {
+    args: &'a LyapArgs,
+    settings: LyapunovSettings,
+    controller: ControllerSettings,
+}
+
+impl ControlTask for ClosedLyap<'_> {
+    type Output = LyapOutput;
+    fn run<const NX: usize, const NU: usize, const NA: usize, M: Model<NX, NU>>(
+        self,
+        model: &M,
+        loaded: &LoadedModel,
+    ) -> Result<LyapOutput> {
+        let x0: [f64; NX] = to_array(&parse_vector("x0", &self.args.x0, model.info().states)?);
+        let field = PidLoop::<_, NX, NU, NA>::new(model, &self.controller, plant(model, loaded)?)?;
+        let xa = field.initial_state(&x0);
+        let (result, timing) = timed_spectrum(self.args, &field, &xa, &self.settings)?;
+        Ok(LyapOutput {
+            model: format!("{} (closed loop)", loaded.name()),
+            params: loaded.params_origin.clone(),
+            x0: xa.to_vec(),
+            u: Vec::new(),
+            settings: self.settings,
+            controller: Some(self.controller),
             result,
             timing,
         })
@@ -256,7 +317,24 @@ pub fn write_files(dir: &std::path::Path, out: &LyapOutput) -> Result<Vec<PathBu
 pub fn run(args: &LyapArgs) -> Result<()> {
     let settings = args.settings()?;
     let loaded = args.model.clone().with_default("vehicle8").load()?;
-    let out = dispatch(&loaded, Lyap { args, settings })?;
+    let out = match &args.gains {
+        Some(text) => {
+            let controller = args
+                .controller
+                .settings(parse_gains("gains", text)?, None, None)?;
+            let nz = controller.n_states();
+            let task = ClosedLyap {
+                args,
+                settings,
+                controller,
+            };
+            dispatch_control(&loaded, nz, task)?
+        }
+        None if args.controller.any() => {
+            bail!("controller options (--setpoint, --f-max, --v-loop, …) need --gains")
+        }
+        None => dispatch(&loaded, Lyap { args, settings })?,
+    };
     if let Some(dir) = &args.out {
         for path in write_files(dir, &out)? {
             eprintln!("wrote {}", path.display());

@@ -256,6 +256,9 @@ pub fn run(args: &PhaseArgs) -> Result<()> {
     let run = args.run.settings(10.0)?;
     let loaded = args.model.clone().with_default("vehicle8").load()?;
     let drives: Vec<(String, Drive)> = match (&args.force, &args.gains) {
+        (Some(_), _) if args.controller.any() => {
+            bail!("--force runs the open loop: controller options do not apply")
+        }
         (Some(text), _) => {
             let sets = split_sets(text);
             if sets.is_empty() {
