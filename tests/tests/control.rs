@@ -415,3 +415,65 @@ fn unrecognised_inputs_are_a_clear_error() {
     assert!(matches!(err, ControlError::UnrecognisedInputs { .. }));
     assert!(err.to_string().contains("push"), "{err}");
 }
+
+/// segway7: the same PD force realised as equal wheel torques τ_L = τ_R = F R/2 stabilises the
+/// pitch too (the motor reaction on the chassis helps), and leaves the same kind of drift.
+#[test]
+fn segway7_wheel_torques_realise_the_force() {
+    let model = Segway7::with_defaults();
+    let r = param(&Segway7::PARAMS, &Segway7::DEFAULTS, "R").unwrap();
+    let plant = Plant::<2>::from_info(&model.info(), |n| {
+        param(&Segway7::PARAMS, &Segway7::DEFAULTS, n)
+    })
+    .unwrap();
+    let settings = ControllerSettings::default();
+    let field = PidLoop::<_, 7, 2, 7>::new(&model, &settings, plant).unwrap();
+    let x0 = scenario::tilted::<7>(model.info().states, 0.1).unwrap();
+    let run = run_closed_loop(&field, &x0, &run5()).unwrap();
+    for c in &run.commands {
+        assert_eq!(c.u[0], c.u[1]);
+        assert!((c.u[0] - c.force * r / 2.0).abs() <= 1e-12 * c.force.abs().max(1.0));
+    }
+    let m = &run.metrics;
+    println!(
+        "segway7: settling {:?}, final v_x {:?}",
+        m.phi.settling_time, m.final_v_x
+    );
+    assert!(m.phi.settling_time.is_some_and(|t| t < 4.0));
+    assert!(m.final_v_x.unwrap() > 0.0);
+}
+
+/// The velocity loop turns the pitch controller into a vehicle that starts, cruises and stops:
+/// v_x follows the trapezoid and the vehicle comes to rest.
+#[test]
+fn maneuver_tracks_the_velocity_reference_and_stops() {
+    let model = vehicle8();
+    let profile = scenario::maneuver(2.0, 3.0, 5.0).unwrap();
+    let t_end = profile.t_last() + 10.0;
+    let settings = ControllerSettings {
+        velocity: Some(VelocityLoop {
+            kp: 0.08,
+            ki: 0.03,
+            reference: profile,
+        }),
+        ..ControllerSettings::default()
+    };
+    let field = PidLoop::<_, 8, 2, 9>::new(&model, &settings, plant8(&model)).unwrap();
+    let run = RunSettings {
+        t_end,
+        ..RunSettings::default()
+    };
+    let r = run_closed_loop(&field, &[0.0; 8], &run).unwrap();
+    let v = r.trajectory.component(5);
+    let cruise_end = r.trajectory.t.iter().position(|t| *t >= 9.0).unwrap();
+    println!(
+        "v_x at the end of the cruise {:.3}, peak {:.3}, final {:.2e}, distance {:?}",
+        v[cruise_end],
+        v.iter().fold(0.0_f64, |m, v| m.max(*v)),
+        r.metrics.final_v_x.unwrap(),
+        r.metrics.x_displacement
+    );
+    assert!((v[cruise_end] - 2.0).abs() < 0.2);
+    assert!(r.metrics.final_v_x.unwrap().abs() < 0.05);
+    assert!(r.metrics.final_phi.abs() < 0.01);
+}
