@@ -6,10 +6,12 @@ pub mod codegen;
 pub mod control_args;
 pub mod disturb;
 pub mod eval;
+pub mod linear;
 pub mod lyap;
 pub mod model;
 pub mod phase;
 pub mod sim;
+pub mod tune;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -41,6 +43,10 @@ pub enum Command {
     /// Phase portraits (Φ, Φ̇) for several gain sets side by side (the study's Fig. 4), or open
     /// loop under constant forces
     Phase(phase::PhaseArgs),
+    /// Linearisation at an equilibrium: modes, pitch-loop margins (gain, phase, disk), LQR
+    Linear(linear::LinearArgs),
+    /// Fit PD/PID gains to a margin specification with Clarabel, with an independent certificate
+    Tune(tune::TuneArgs),
 }
 
 /// Run one command.
@@ -53,5 +59,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Sim(args) => sim::run(args),
         Command::Disturb(args) => disturb::run(args),
         Command::Phase(args) => phase::run(args),
+        Command::Linear(args) => linear::run(args),
+        Command::Tune(args) => tune::run(args),
     }
 }

@@ -22,7 +22,7 @@ use super::lyap::solve_lyapunov;
 use super::modes::{eigenvalues, spectral_abscissa};
 
 /// How the Riccati solver ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum CareStatus {
     /// Stabilising solution found.
     Solved,

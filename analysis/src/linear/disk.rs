@@ -11,7 +11,7 @@
 use nalgebra::Complex;
 
 /// The balanced disk margin and what it guarantees.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct DiskMargin {
     /// α_max = 1/‖S − ½‖∞ (0 for an unstable loop).
     pub alpha: f64,

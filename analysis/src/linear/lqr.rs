@@ -8,7 +8,7 @@ use super::error::LinearError;
 use super::modes::{eigenvalues, spectral_abscissa};
 
 /// An LQR design and its check.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Lqr {
     /// How the Riccati solver ended; the rest is meaningful only for `Solved`.
     pub status: CareStatus,

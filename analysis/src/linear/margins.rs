@@ -59,7 +59,7 @@ impl GridOptions {
 }
 
 /// Margins of a loop. Gain, phase and delay margins are meaningful only when `stable`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Margins {
     /// Nominal closed loop stable, delay included.
     pub stable: bool,

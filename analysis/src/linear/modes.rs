@@ -7,7 +7,7 @@ use nalgebra::{Complex, DMatrix, Schur, SVD};
 use super::error::{check_finite, LinearError};
 
 /// What kind of mode an eigenvalue is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum ModeKind {
     /// A zero eigenvalue: the state drifts (integrates) without being restored.
     Drift,
@@ -20,7 +20,7 @@ pub enum ModeKind {
 }
 
 /// One eigenvalue and the states that take part in it.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Mode {
     /// The eigenvalue.
     pub eigenvalue: Complex<f64>,

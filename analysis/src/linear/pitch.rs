@@ -16,7 +16,7 @@ use super::modes::{eigenvalues, spectral_abscissa, zero_tolerance};
 use super::siso::{HiddenPart, SisoPlant};
 
 /// PID gains of F = Kp Φ + Ki ∫Φ + Kd Φ̇ (N/rad, N/(rad s), N s/rad for a force input).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct PidGains {
     /// Proportional gain.
     pub kp: f64,
@@ -38,7 +38,7 @@ impl PidGains {
 }
 
 /// What sits between the controller and the vehicle.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub struct LoopOptions {
     /// First-order actuator lag time constant τ (s); 0 = none.
     pub lag: f64,
@@ -79,7 +79,7 @@ pub struct PitchLoop {
 }
 
 /// Closed-loop eigenvalues, split into what the pitch loop moves and what it cannot.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ClosedLoop {
     /// Poles of the loop itself: the minimal plant with the controller (and lag) states.
     pub loop_eigenvalues: Vec<Complex<f64>>,

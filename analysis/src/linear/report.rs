@@ -6,7 +6,7 @@ use super::margins::{loop_margins, GridOptions, Margins};
 use super::pitch::{ClosedLoop, LoopOptions, PidGains, PitchLoop};
 
 /// Closed-loop spectrum and margins of a pitch loop.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct PitchAnalysis {
     /// Eigenvalues (delay-free) and the hidden modes.
     pub closed_loop: ClosedLoop,

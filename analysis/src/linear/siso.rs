@@ -13,7 +13,7 @@ use super::error::{check_finite, LinearError};
 use super::modes::eigenvalues;
 
 /// Why a part of the state is invisible to the loop.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum HiddenKind {
     /// The input cannot move it.
     Uncontrollable,
@@ -23,7 +23,7 @@ pub enum HiddenKind {
 
 /// A part of the state the loop cannot move or see; its eigenvalues are the same in open and
 /// closed loop.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct HiddenPart {
     /// Why it is hidden.
     pub kind: HiddenKind,

@@ -8,7 +8,7 @@ use crate::linear::pitch::{LoopOptions, PidGains, PitchLoop};
 use crate::linear::report::{analyse_pitch, PitchAnalysis};
 
 /// What was checked and what came out.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Certificate {
     /// The gains checked.
     pub gains: PidGains,

@@ -9,7 +9,7 @@ use crate::linear::disk::{alpha_from_gain, alpha_from_phase_deg, Disk};
 use crate::linear::margins::Margins;
 
 /// One margin requirement.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub enum Requirement {
     /// Balanced disk phase margin ≥ `deg` degrees (`dpm>=45`); 0 < deg < 90.
     DiskPhase {
@@ -29,7 +29,7 @@ pub enum Requirement {
 }
 
 /// A conjunction of requirements.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Spec {
     /// All must hold.
     pub requirements: Vec<Requirement>,

@@ -19,7 +19,7 @@ use crate::linear::margins::{loop_margins, GridOptions};
 use crate::linear::pitch::{LoopOptions, PidGains, PitchLoop};
 
 /// How the tuning ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum TuneStatus {
     /// Gains found and independently verified.
     Solved,
@@ -70,7 +70,7 @@ impl Default for TuneOptions {
 }
 
 /// The tuner's answer.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct TuneResult {
     /// How it ended.
     pub status: TuneStatus,
