@@ -155,10 +155,13 @@ fn write_ir(dir: &Path, name: &str, edit: impl Fn(&str) -> String) -> PathBuf {
     path
 }
 
+/// An edit of an IR text.
+type Edit = Box<dyn Fn(&str) -> String>;
+
 #[test]
 fn malformed_ir_of_each_kind_is_a_clear_error() {
     let dir = scratch("ir");
-    let cases: [(&str, Box<dyn Fn(&str) -> String>, &str); 4] = [
+    let cases: [(&str, Edit, &str); 4] = [
         (
             "version.json",
             Box::new(|t: &str| t.replace("twv-ir/1", "twv-ir/9")),
