@@ -46,7 +46,8 @@ pub struct DisturbArgs {
     pub json: bool,
 }
 
-pub fn run(args: &DisturbArgs) -> Result<()> {
+/// The experiment these arguments describe (also used by the report).
+pub fn experiment(args: &DisturbArgs) -> Result<Experiment> {
     let gains = match &args.gains {
         Some(text) => parse_gains("gains", text)?,
         None => STUDY_PD,
@@ -70,5 +71,14 @@ pub fn run(args: &DisturbArgs) -> Result<()> {
         x0: None,
         phi0: tilt.phi0(magnitude),
     };
-    execute(&experiment, &args.model, args.out.as_deref(), args.json)
+    Ok(experiment)
+}
+
+pub fn run(args: &DisturbArgs) -> Result<()> {
+    execute(
+        &experiment(args)?,
+        &args.model,
+        args.out.as_deref(),
+        args.json,
+    )
 }

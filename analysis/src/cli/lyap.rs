@@ -314,10 +314,11 @@ pub fn write_files(dir: &std::path::Path, out: &LyapOutput) -> Result<Vec<PathBu
     Ok(files.commit())
 }
 
-pub fn run(args: &LyapArgs) -> Result<()> {
+/// Compute the spectrum these arguments describe (also used by the report).
+pub fn compute(args: &LyapArgs) -> Result<LyapOutput> {
     let settings = args.settings()?;
     let loaded = args.model.clone().with_default("vehicle8").load()?;
-    let out = match &args.gains {
+    Ok(match &args.gains {
         Some(text) => {
             let controller = args
                 .controller
@@ -334,7 +335,11 @@ pub fn run(args: &LyapArgs) -> Result<()> {
             bail!("controller options (--setpoint, --f-max, --v-loop, …) need --gains")
         }
         None => dispatch(&loaded, Lyap { args, settings })?,
-    };
+    })
+}
+
+pub fn run(args: &LyapArgs) -> Result<()> {
+    let out = compute(args)?;
     if let Some(dir) = &args.out {
         for path in write_files(dir, &out)? {
             eprintln!("wrote {}", path.display());

@@ -227,13 +227,23 @@ fn side_by_side(docs: &[String], size: (u32, u32), cols: usize) -> String {
 }
 
 /// Write the figures, phase.csv and phase.json (all or nothing).
-pub fn write_files(dir: &Path, out: &PhaseOutput) -> Result<Vec<PathBuf>> {
-    let size = (560, 480);
-    let docs: Vec<String> = out
-        .portraits
+/// One SVG per portrait (560 × 480 px each).
+pub fn portrait_figures(out: &PhaseOutput) -> Result<Vec<String>> {
+    out.portraits
         .iter()
-        .map(|p| portrait_svg(p, size))
-        .collect::<Result<_>>()?;
+        .map(|p| portrait_svg(p, PORTRAIT_SIZE))
+        .collect()
+}
+
+/// The portraits side by side in one SVG (four to a row).
+pub fn combined_figure(docs: &[String]) -> String {
+    side_by_side(docs, PORTRAIT_SIZE, 4)
+}
+
+const PORTRAIT_SIZE: (u32, u32) = (560, 480);
+
+pub fn write_files(dir: &Path, out: &PhaseOutput) -> Result<Vec<PathBuf>> {
+    let docs = portrait_figures(out)?;
     let mut csv = String::from("set,run,t,phi,phi_dot\n");
     for (i, p) in out.portraits.iter().enumerate() {
         for (j, r) in p.runs.iter().enumerate() {
@@ -246,13 +256,14 @@ pub fn write_files(dir: &Path, out: &PhaseOutput) -> Result<Vec<PathBuf>> {
     for (i, doc) in docs.iter().enumerate() {
         files.write(&format!("phase_{}.svg", i + 1), doc.as_bytes())?;
     }
-    files.write("phase.svg", side_by_side(&docs, size, 4).as_bytes())?;
+    files.write("phase.svg", combined_figure(&docs).as_bytes())?;
     files.write("phase.csv", csv.as_bytes())?;
     files.write("phase.json", serde_json::to_string_pretty(out)?.as_bytes())?;
     Ok(files.commit())
 }
 
-pub fn run(args: &PhaseArgs) -> Result<()> {
+/// Compute the portraits (also used by the report).
+pub fn compute(args: &PhaseArgs) -> Result<PhaseOutput> {
     let run = args.run.settings(10.0)?;
     let loaded = args.model.clone().with_default("vehicle8").load()?;
     let drives: Vec<(String, Drive)> = match (&args.force, &args.gains) {
@@ -342,12 +353,16 @@ pub fn run(args: &PhaseArgs) -> Result<()> {
             runs,
         });
     }
-    let out = PhaseOutput {
+    Ok(PhaseOutput {
         model: loaded.name().to_string(),
         params: loaded.params_origin.clone(),
         run,
         portraits,
-    };
+    })
+}
+
+pub fn run(args: &PhaseArgs) -> Result<()> {
+    let out = compute(args)?;
     if let Some(dir) = &args.out {
         for path in write_files(dir, &out)? {
             eprintln!("wrote {}", path.display());

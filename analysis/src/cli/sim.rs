@@ -289,6 +289,12 @@ pub fn write_files(dir: &Path, out: &SimOutput) -> Result<Vec<PathBuf>> {
     Ok(files.commit())
 }
 
+/// Runs an experiment on the resolved model (also used by the report).
+pub fn compute(experiment: &Experiment, model: &ModelArgs) -> Result<SimOutput> {
+    let loaded = model.clone().with_default("vehicle8").load()?;
+    dispatch_control(&loaded, experiment.controller.n_states(), experiment)
+}
+
 /// Runs an experiment on the resolved model, writes and prints it.
 pub fn execute(
     experiment: &Experiment,
@@ -296,8 +302,7 @@ pub fn execute(
     out: Option<&Path>,
     json: bool,
 ) -> Result<()> {
-    let loaded = model.clone().with_default("vehicle8").load()?;
-    let result = dispatch_control(&loaded, experiment.controller.n_states(), experiment)?;
+    let result = compute(experiment, model)?;
     if let Some(dir) = out {
         for path in write_files(dir, &result)? {
             eprintln!("wrote {}", path.display());
