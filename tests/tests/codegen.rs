@@ -921,3 +921,39 @@ mod all_operations {
         }
     }
 }
+
+/// The report prints the IR's functions as formulas; for Lorenz they are the textbook ones.
+#[test]
+fn formulas_print_the_textbook_equations() {
+    let ir = shipped_ir("lorenz");
+    let names: Vec<String> = ir.states().iter().map(|s| s.name.clone()).collect();
+    let f = twv_ir::formulas(&ir, ir.function("f").unwrap(), &names, &[]);
+    assert!(f.temporaries.is_empty() || f.temporaries.iter().all(|(n, _)| n.starts_with('t')));
+    let text: Vec<String> = f
+        .entries
+        .iter()
+        .map(|(l, e)| format!("{l} = {e}"))
+        .collect();
+    let expanded: Vec<String> = text
+        .iter()
+        .map(|line| {
+            f.temporaries.iter().fold(line.clone(), |acc, (n, e)| {
+                acc.replace(n.as_str(), &format!("({e})"))
+            })
+        })
+        .collect();
+    assert_eq!(
+        expanded,
+        [
+            "f[x] = sigma*(y - x)",
+            "f[y] = x*(rho - z) - y",
+            "f[z] = x*y - beta*z"
+        ],
+        "{text:?}"
+    );
+    let ir = shipped_ir("vehicle8");
+    let speeds: Vec<String> = ir.states()[4..].iter().map(|s| s.name.clone()).collect();
+    let gravity = twv_ir::formulas(&ir, ir.function("F").unwrap(), &speeds, &[]);
+    assert_eq!(gravity.entries[0].0, "F[w_y]");
+    assert!(gravity.entries[0].1.contains("sin(phi)") && gravity.entries[0].1.contains("m2"));
+}

@@ -8,6 +8,7 @@
 
 mod error;
 mod hash;
+mod infix;
 mod interp;
 pub mod ops;
 mod params;
@@ -19,6 +20,7 @@ pub use error::{
     WorkTooShort,
 };
 pub use hash::{content_hash, rehash, sha256_hex, HASH_PLACEHOLDER};
+pub use infix::{formulas, Formulas};
 pub use interp::{visit_interpreted, Interpreted, UnsupportedSize, VisitError};
 pub use ops::{BinaryOp, UnaryOp};
 pub use params::{check_values, load_params, parse_params};
