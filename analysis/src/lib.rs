@@ -10,4 +10,5 @@ pub mod linear;
 pub mod lyapunov;
 pub mod output;
 pub mod plot;
+pub mod sweep;
 pub mod tune;

@@ -11,6 +11,7 @@ pub mod lyap;
 pub mod model;
 pub mod phase;
 pub mod sim;
+pub mod sweep;
 pub mod tune;
 
 use anyhow::Result;
@@ -47,6 +48,10 @@ pub enum Command {
     Linear(linear::LinearArgs),
     /// Fit PD/PID gains to a margin specification with Clarabel, with an independent certificate
     Tune(tune::TuneArgs),
+    /// Stability map over PID gains (one shard of it; resumable; Slurm/Kubernetes arrays)
+    Sweep(sweep::SweepArgs),
+    /// Merge the shards of a sweep: check completeness, write map.csv, map.json, map.svg
+    Merge(sweep::MergeArgs),
 }
 
 /// Run one command.
@@ -61,5 +66,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Phase(args) => phase::run(args),
         Command::Linear(args) => linear::run(args),
         Command::Tune(args) => tune::run(args),
+        Command::Sweep(args) => sweep::run(args),
+        Command::Merge(args) => sweep::run_merge(args),
     }
 }

@@ -1,6 +1,9 @@
 //! Figures as SVG (plotters' SVG backend: text stays text, no font files needed), so every
 //! result a person opens is a plain file a browser shows and the HTML report can inline.
 
+mod heatmap;
+pub use heatmap::{heat_map, zero_contour, HeatMap, Segment};
+
 use plotters::prelude::*;
 
 /// One named curve.

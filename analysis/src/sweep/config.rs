@@ -1,0 +1,93 @@
+//! What defines a sweep — model, parameters, metric and its settings, grid, initial state,
+//! controller — and the hash that tells whether two shards belong to the same sweep.
+
+use serde::{Deserialize, Serialize};
+
+use super::grid::Grid;
+
+/// The quantity mapped over the grid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Metric {
+    /// Largest Lyapunov exponent of the nonlinear closed loop from the tilt, study preset
+    MaxLyapunov,
+    /// Largest real part of the linear pitch loop's poles at the upright
+    SpectralAbscissa,
+    /// 2 % settling time of Φ after the tilt
+    SettlingTime,
+}
+
+impl Metric {
+    /// Name and unit for tables and figures.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Metric::MaxLyapunov => "largest Lyapunov exponent λ1 [1/s]",
+            Metric::SpectralAbscissa => "spectral abscissa max Re s [1/s]",
+            Metric::SettlingTime => "2 % settling time of Φ [s]",
+        }
+    }
+}
+
+/// The fixed numerical settings of the nonlinear metrics (the study's preset), recorded so a
+/// shard computed by another build with other defaults is not mixed in.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MetricSettings {
+    /// RK4 step [s].
+    pub h: f64,
+    /// Lyapunov re-orthonormalisation interval T [s].
+    pub t_sample: f64,
+    /// Lyapunov iterations K.
+    pub iterations: usize,
+    /// Settling-time run length [s].
+    pub t_end: f64,
+    /// Settling-time sample interval [s].
+    pub sample: f64,
+    /// |Φ| beyond which the vehicle has fallen [rad].
+    pub fall_angle: f64,
+}
+
+impl Default for MetricSettings {
+    /// The study's preset: h = 1 ms, T = 0.1 s, K = 100; 10 s runs sampled every 10 ms; π/2.
+    fn default() -> Self {
+        Self {
+            h: 1e-3,
+            t_sample: 0.1,
+            iterations: 100,
+            t_end: 10.0,
+            sample: 0.01,
+            fall_angle: std::f64::consts::FRAC_PI_2,
+        }
+    }
+}
+
+/// Everything a point's result depends on besides its index.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SweepConfig {
+    /// Model name.
+    pub model: String,
+    /// Where the model came from (`shipped` or the IR file).
+    pub source: String,
+    /// Parameter values in the model's order.
+    pub params: Vec<f64>,
+    pub metric: Metric,
+    pub grid: Grid,
+    /// Initial model state of the nonlinear metrics (the tilt).
+    pub x0: Vec<f64>,
+    /// The controller apart from the swept gains (as `twv sim` reports it).
+    pub controller: serde_json::Value,
+    pub settings: MetricSettings,
+}
+
+impl SweepConfig {
+    /// FNV-1a (64 bit) of the canonical JSON, as 16 hex digits: stable across builds and
+    /// machines (serde_json prints floats exactly), no extra dependency.
+    pub fn hash(&self) -> String {
+        let json = serde_json::to_string(self).expect("a sweep config serialises");
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in json.bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        format!("{h:016x}")
+    }
+}

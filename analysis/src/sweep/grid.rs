@@ -1,0 +1,122 @@
+//! The gain grid: axes `A:B:N`, and the row-major order that gives every point a fixed index.
+//!
+//! Order: Kp varies fastest, then Kd, then Ki —
+//! `index = (i_ki · N_kd + i_kd) · N_kp + i_kp`. One row of the map (fixed Kd, Ki) is therefore a
+//! contiguous index range, and a point's gains depend only on its index.
+
+use serde::{Deserialize, Serialize};
+
+use super::error::SweepError;
+use crate::linear::PidGains;
+
+/// `N` values evenly spaced from `lo` to `hi` inclusive (`N = 1`: just `lo`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Axis {
+    pub lo: f64,
+    pub hi: f64,
+    pub n: usize,
+}
+
+impl Axis {
+    /// Parses `A:B:N` for option `--{name}`.
+    pub fn parse(name: &'static str, text: &str) -> Result<Self, SweepError> {
+        let bad = |reason: &str| SweepError::Axis {
+            axis: name,
+            text: text.to_string(),
+            reason: reason.to_string(),
+        };
+        let parts: Vec<&str> = text.split(':').map(str::trim).collect();
+        let [lo, hi, n] = parts[..] else {
+            return Err(bad("three fields separated by `:`"));
+        };
+        let num = |s: &str| {
+            s.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(&format!("`{s}` is not a finite number")))
+        };
+        let (lo, hi) = (num(lo)?, num(hi)?);
+        let n: usize = n
+            .parse()
+            .map_err(|_| bad(&format!("`{n}` is not a count")))?;
+        if n == 0 {
+            return Err(bad("the count N must be ≥ 1"));
+        }
+        if n > 1 && hi <= lo {
+            return Err(bad("need A < B when N > 1"));
+        }
+        Ok(Self { lo, hi, n })
+    }
+
+    /// The `i`-th value, computed from `i` alone (no accumulated sums), so every shard agrees.
+    pub fn value(&self, i: usize) -> f64 {
+        if self.n == 1 {
+            self.lo
+        } else if i + 1 == self.n {
+            self.hi
+        } else {
+            self.lo + (self.hi - self.lo) * (i as f64 / (self.n - 1) as f64)
+        }
+    }
+
+    /// Distance between neighbouring values (0 for one value).
+    pub fn spacing(&self) -> f64 {
+        if self.n > 1 {
+            (self.hi - self.lo) / (self.n - 1) as f64
+        } else {
+            0.0
+        }
+    }
+
+    /// All values.
+    pub fn values(&self) -> Vec<f64> {
+        (0..self.n).map(|i| self.value(i)).collect()
+    }
+}
+
+/// The (Kp, Kd[, Ki]) grid; without a Ki axis Ki = 0 (a PD law).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Grid {
+    pub kp: Axis,
+    pub kd: Axis,
+    pub ki: Option<Axis>,
+}
+
+impl Grid {
+    /// Number of Ki values (1 without a Ki axis).
+    pub fn n_ki(&self) -> usize {
+        self.ki.map_or(1, |a| a.n)
+    }
+
+    /// Number of points of one (Kp, Kd) map.
+    pub fn map_len(&self) -> usize {
+        self.kp.n * self.kd.n
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.map_len() * self.n_ki()
+    }
+
+    /// Whether the grid is empty (never, for parsed axes).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// (i_kp, i_kd, i_ki) of a point (see the module documentation for the order).
+    pub fn coords(&self, index: usize) -> (usize, usize, usize) {
+        let i_kp = index % self.kp.n;
+        let rest = index / self.kp.n;
+        (i_kp, rest % self.kd.n, rest / self.kd.n)
+    }
+
+    /// The gains of a point.
+    pub fn gains(&self, index: usize) -> PidGains {
+        let (i, j, k) = self.coords(index);
+        PidGains {
+            kp: self.kp.value(i),
+            ki: self.ki.map_or(0.0, |a| a.value(k)),
+            kd: self.kd.value(j),
+        }
+    }
+}

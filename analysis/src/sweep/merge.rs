@@ -1,0 +1,169 @@
+//! `twv merge`: gather the shard files of one sweep, check that every index is present exactly
+//! once, and write the map (CSV, JSON, SVG heat map with the stability boundary).
+//!
+//! The outputs depend only on the config and the points (in index order), never on how the
+//! sweep was sharded: a sharded and an unsharded run merge to the same bytes.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use super::config::{Metric, SweepConfig};
+use super::error::{ranges, SweepError};
+use super::file::{shard_paths, ShardFile};
+use super::point::PointResult;
+use crate::output::OutputDir;
+use crate::plot::{heat_map, HeatMap};
+
+/// Format tag of map.json.
+pub const MAP_FORMAT: &str = "twv-sweep-map/1";
+
+/// A complete sweep: one result per index, in index order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Map {
+    pub format: &'static str,
+    pub config_hash: String,
+    pub config: SweepConfig,
+    pub points: Vec<PointResult>,
+}
+
+/// Reads every shard in `dir` and checks they form one complete sweep.
+pub fn collect(dir: &Path) -> Result<Map, SweepError> {
+    let paths = shard_paths(dir)?;
+    let Some(first_path) = paths.first() else {
+        return Err(SweepError::NoShards {
+            dir: dir.to_path_buf(),
+        });
+    };
+    let first = ShardFile::read(first_path)?;
+    let total = first.config.grid.len();
+    let mut slots: Vec<Option<(PointResult, usize)>> = vec![None; total];
+    let mut duplicates: Vec<usize> = Vec::new();
+    let mut duplicate_files: Vec<usize> = Vec::new();
+    for (k, path) in paths.iter().enumerate() {
+        let file = if k == 0 {
+            first.clone()
+        } else {
+            ShardFile::read(path)?
+        };
+        if file.config_hash != first.config_hash || file.config != first.config {
+            return Err(SweepError::MixedConfigs {
+                path: path.clone(),
+                found: file.config_hash,
+                expected: first.config_hash.clone(),
+                first: first_path.clone(),
+            });
+        }
+        for p in file.points {
+            let Some(slot) = slots.get_mut(p.index) else {
+                return Err(SweepError::File {
+                    path: path.clone(),
+                    reason: format!("index {} outside the grid of {total} points", p.index),
+                });
+            };
+            match slot {
+                Some((_, other)) => {
+                    duplicates.push(p.index);
+                    duplicate_files.extend([*other, k]);
+                }
+                None => *slot = Some((p, k)),
+            }
+        }
+    }
+    let missing: Vec<usize> = (0..total).filter(|&i| slots[i].is_none()).collect();
+    if !missing.is_empty() {
+        return Err(SweepError::Missing {
+            count: missing.len(),
+            indices: ranges(&missing),
+        });
+    }
+    if !duplicates.is_empty() {
+        duplicates.sort_unstable();
+        duplicates.dedup();
+        duplicate_files.sort_unstable();
+        duplicate_files.dedup();
+        let files: Vec<String> = duplicate_files
+            .iter()
+            .map(|&k| paths[k].display().to_string())
+            .collect();
+        return Err(SweepError::Duplicate {
+            count: duplicates.len(),
+            indices: ranges(&duplicates),
+            files: files.join(", "),
+        });
+    }
+    Ok(Map {
+        format: MAP_FORMAT,
+        config_hash: first.config_hash.clone(),
+        config: first.config,
+        points: slots.into_iter().flatten().map(|(p, _)| p).collect(),
+    })
+}
+
+impl Map {
+    /// `index,kp,ki,kd,value,status`; an empty value where there is none.
+    pub fn csv(&self) -> String {
+        let mut s = String::from("index,kp,ki,kd,value,status\n");
+        for p in &self.points {
+            let value = p.value.map(|v| v.to_string()).unwrap_or_default();
+            let status = serde_json::to_value(p.status).expect("status serialises");
+            let status = status.as_str().unwrap_or_default();
+            s += &format!("{},{},{},{},{value},{status}\n", p.index, p.kp, p.ki, p.kd);
+        }
+        s
+    }
+
+    /// Heat maps over (Kp, Kd), one per Ki value: `map.svg` for the first Ki (the only one
+    /// without a Ki axis), `map-ki-<k>.svg` for the k-th after it.
+    pub fn figures(&self) -> Result<Vec<(String, String)>, SweepError> {
+        let grid = &self.config.grid;
+        let signed = self.config.metric != Metric::SettlingTime;
+        let (xs, ys) = (grid.kp.values(), grid.kd.values());
+        let mut out = Vec::new();
+        for (k, slice) in self.points.chunks(grid.map_len()).enumerate() {
+            let values: Vec<f64> = slice.iter().map(|p| p.value.unwrap_or(f64::NAN)).collect();
+            let boundary: Vec<f64> = slice
+                .iter()
+                .map(|p| p.stability_indicator(signed))
+                .collect();
+            let ki = grid.ki.map_or(0.0, |a| a.value(k));
+            let title = format!(
+                "{} over (Kp, Kd), Ki = {ki}: {}",
+                self.config.model,
+                self.config.metric.label()
+            );
+            let svg = heat_map(&HeatMap {
+                title: &title,
+                x_label: "Kp [N/rad]",
+                y_label: "Kd [N s/rad]",
+                value_label: self.config.metric.label(),
+                xs: &xs,
+                ys: &ys,
+                values: &values,
+                boundary: &boundary,
+                size: (900, 700),
+            })?;
+            let name = if k == 0 {
+                "map.svg".to_string()
+            } else {
+                format!("map-ki-{k}.svg")
+            };
+            out.push((name, svg));
+        }
+        Ok(out)
+    }
+}
+
+/// Merges the shards in `dir` and writes map.csv, map.json and the figures there (all or
+/// nothing).
+pub fn merge(dir: &Path) -> Result<(Map, Vec<PathBuf>), SweepError> {
+    let map = collect(dir)?;
+    let mut files = OutputDir::create(dir)?;
+    files.write("map.csv", map.csv().as_bytes())?;
+    let json = serde_json::to_string_pretty(&map).expect("a map serialises");
+    files.write("map.json", json.as_bytes())?;
+    for (name, svg) in map.figures()? {
+        files.write(&name, svg.as_bytes())?;
+    }
+    Ok((map, files.commit()))
+}
