@@ -1,6 +1,6 @@
 //! `twv_model!`: turn a model IR file into a Rust model at compile time.
 //!
-//! ```ignore
+//! ```text
 //! twv_macros::twv_model!(ir = "ir/vehicle8.json", name = Vehicle8);
 //! twv_macros::twv_model!(ir = "ir/vehicle8.json", name = Vehicle8, bake = "../vehicles/paper.toml");
 //! twv_macros::twv_model!(ir = "ir/lorenz.json", name = Lorenz, bake = defaults);
