@@ -188,7 +188,7 @@ impl ControlTask for Chunk<'_> {
         for index in self.indices {
             let gains = self.config.grid.gains(index);
             let controller = self.args.controller.settings(gains, None, None)?;
-            let field = PidLoop::<_, NX, NU, NA>::new(model, &controller, plant.clone())?;
+            let field = PidLoop::<_, NX, NU, NA>::new(model, &controller, plant)?;
             out.push(match self.config.metric {
                 Metric::MaxLyapunov => metric::max_lyapunov(&field, &x0, s, index),
                 Metric::SettlingTime => metric::settling_time(&field, &x0, s, index),
