@@ -10,5 +10,6 @@ pub mod linear;
 pub mod lyapunov;
 pub mod output;
 pub mod plot;
+pub mod report;
 pub mod sweep;
 pub mod tune;

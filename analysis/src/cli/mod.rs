@@ -10,6 +10,7 @@ pub mod linear;
 pub mod lyap;
 pub mod model;
 pub mod phase;
+pub mod report;
 pub mod sim;
 pub mod sweep;
 pub mod tune;
@@ -48,6 +49,8 @@ pub enum Command {
     Linear(linear::LinearArgs),
     /// Fit PD/PID gains to a margin specification with Clarabel, with an independent certificate
     Tune(tune::TuneArgs),
+    /// Reproduce the study end to end into one HTML report (figures and data beside it)
+    Report(report::ReportArgs),
     /// Stability map over PID gains (one shard of it; resumable; Slurm/Kubernetes arrays)
     Sweep(sweep::SweepArgs),
     /// Merge the shards of a sweep: check completeness, write map.csv, map.json, map.svg
@@ -66,6 +69,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Phase(args) => phase::run(args),
         Command::Linear(args) => linear::run(args),
         Command::Tune(args) => tune::run(args),
+        Command::Report(args) => report::run(args),
         Command::Sweep(args) => sweep::run(args),
         Command::Merge(args) => sweep::run_merge(args),
     }

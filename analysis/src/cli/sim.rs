@@ -192,7 +192,8 @@ impl SimOutput {
         Some(self.rows.iter().map(|r| (r[0], r[i])).collect())
     }
 
-    fn csv(&self) -> String {
+    /// The time series as CSV (header = `columns`).
+    pub fn csv(&self) -> String {
         let mut s = self.columns.join(",");
         s.push('\n');
         for r in &self.rows {
