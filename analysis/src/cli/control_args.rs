@@ -30,16 +30,16 @@ pub struct ControllerArgs {
     #[arg(long, value_name = "SETPOINT", allow_hyphen_values = true)]
     pub setpoint: Option<String>,
     /// First-order filter on the measured pitch rate, time constant [s] [default: none]
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub rate_filter: Option<f64>,
     /// Force limit |F| ≤ F_MAX [N] (for segway7 the total wheel torque is F·R) [default: none]
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub f_max: Option<f64>,
     /// Anti-windup when saturated: none, conditional (clamping) or back-calc [default: conditional]
     #[arg(long, value_enum, value_name = "KIND")]
     pub anti_windup: Option<AntiWindupKind>,
     /// Back-calculation tracking time [s] [default: 0.3]
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub tracking_time: Option<f64>,
     /// Forward-velocity outer loop gains KP,KI [rad per m/s, rad per m]: leans the pitch
     /// setpoint by KP·(v_ref − v_x) + KI·∫(v_ref − v_x) dt [default: no velocity loop; the
@@ -72,26 +72,26 @@ pub enum AntiWindupKind {
 #[derive(Args, Debug, Clone)]
 pub struct RunArgs {
     /// Simulated time [s] [default: 10; for the maneuver its length + 10]
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub t_end: Option<f64>,
     /// Output interval of the CSV and figures [s] [default: 0.01]
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub sample: Option<f64>,
     /// Integrator [default: rk4]
     #[arg(long, value_enum)]
     pub integrator: Option<super::lyap::Integrator>,
     /// RK4 step, or the DOPRI initial step [s] [default: 1e-3]
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub h: Option<f64>,
     /// DOPRI relative tolerance [default: 1e-9]
-    #[arg(long, value_name = "TOL")]
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub rtol: Option<f64>,
     /// DOPRI absolute tolerance [default: 1e-12]
-    #[arg(long, value_name = "TOL")]
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub atol: Option<f64>,
     /// Stop the run when |Φ| exceeds this angle: the vehicle fell over [rad]; `inf` runs on
     /// [default: 1.5708 (π/2)]
-    #[arg(long, value_name = "RAD")]
+    #[arg(long, value_name = "RAD", allow_hyphen_values = true)]
     pub fall_angle: Option<f64>,
 }
 

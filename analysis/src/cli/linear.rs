@@ -36,16 +36,36 @@ pub struct LinearArgs {
     #[arg(long, value_name = "KP,KI,KD", default_value = "3860,0,1980")]
     pub gains: String,
     /// First-order actuator lag in the loop [s]
-    #[arg(long, value_name = "S", default_value_t = 0.0)]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub actuator_lag: f64,
     /// Pure delay in the loop [s]
-    #[arg(long, value_name = "S", default_value_t = 0.0)]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub delay: f64,
     /// LQR state weight (the same for phi, x, w_y, v_x)
-    #[arg(long, value_name = "Q", default_value_t = 1.0)]
+    #[arg(
+        long,
+        value_name = "Q",
+        default_value_t = 1.0,
+        allow_hyphen_values = true
+    )]
     pub lqr_q: f64,
     /// LQR input weight [1/N²]
-    #[arg(long, value_name = "R", default_value_t = 1e-4)]
+    #[arg(
+        long,
+        value_name = "R",
+        default_value_t = 1e-4,
+        allow_hyphen_values = true
+    )]
     pub lqr_r: f64,
     /// Print JSON instead of the summary
     #[arg(long)]

@@ -41,10 +41,20 @@ pub struct TuneArgs {
     #[arg(long, value_enum)]
     pub objective: Option<ObjectiveArg>,
     /// First-order actuator lag in the loop [s]
-    #[arg(long, value_name = "S", default_value_t = 0.0)]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub actuator_lag: f64,
     /// Pure delay in the loop [s]
-    #[arg(long, value_name = "S", default_value_t = 0.0)]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub delay: f64,
     /// Print JSON instead of the summary
     #[arg(long)]
