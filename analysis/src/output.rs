@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// The output folder cannot be created or written.
-    #[error("cannot write to {path}: {source}")]
+    #[error("cannot write to {path}")]
     Io {
         path: PathBuf,
         #[source]

@@ -62,10 +62,10 @@ pub struct SimArgs {
     #[arg(long, value_name = "M/S", allow_hyphen_values = true)]
     pub v_cruise: Option<f64>,
     /// Maneuver acceleration and deceleration time [s] [default: 3]
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub ramp: Option<f64>,
     /// Maneuver cruise time [s] [default: 5]
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub cruise: Option<f64>,
     #[command(flatten)]
     pub controller: ControllerArgs,
