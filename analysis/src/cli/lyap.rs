@@ -131,6 +131,8 @@ impl LyapArgs {
         if let Some(seed) = self.seed {
             s.basis = InitialBasis::Random { seed };
         }
+        // Batch means need at least two intervals per batch count; short runs use fewer batches.
+        s.batches = s.batches.min(s.iterations).max(2);
         s.validate()?;
         Ok(s)
     }

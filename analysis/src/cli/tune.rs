@@ -9,8 +9,10 @@ use twv_model::Model;
 use super::control_args::parse_gains;
 use super::linear::pitch_loop;
 use super::model::{dispatch, LoadedModel, ModelArgs, ModelTask};
+use super::{Cli, Command};
 use crate::linear::{linearize, LoopOptions, OperatingPoint, PidGains};
 use crate::tune::{tune, Objective, Spec, TuneOptions, TuneResult, TuneStatus};
+use clap::Parser;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ObjectiveArg {
@@ -67,6 +69,58 @@ pub struct TuneReport {
     pub model: String,
     pub params: String,
     pub result: TuneResult,
+    /// The nonlinear check of the certificate's gains: a 0.1 rad forward tilt, 10 s.
+    pub tilt_check: Option<TiltCheck>,
+}
+
+/// Part of the certificate: the tuned gains on the nonlinear model after a tilt.
+#[derive(Debug, Clone, Serialize)]
+pub struct TiltCheck {
+    pub tilt: f64,
+    pub recovered: bool,
+    pub settling_time: Option<f64>,
+    pub overshoot: Option<f64>,
+    pub peak_force: f64,
+    pub final_phi: f64,
+}
+
+/// Simulate the nonlinear closed loop with `gains` after a 0.1 rad forward tilt (the same code
+/// as `twv disturb`).
+fn tilt_check(args: &TuneArgs, gains: &PidGains) -> Result<TiltCheck> {
+    let mut words: Vec<String> = ["twv", "disturb", "--tilt", "forward"]
+        .map(String::from)
+        .to_vec();
+    words.push("--gains".into());
+    words.push(format!("{},{},{}", gains.kp, gains.ki, gains.kd));
+    for (flag, value) in [
+        ("--model", args.model.model.clone()),
+        (
+            "--ir",
+            args.model.ir.as_ref().map(|p| p.display().to_string()),
+        ),
+        (
+            "--params",
+            args.model.params.as_ref().map(|p| p.display().to_string()),
+        ),
+    ] {
+        if let Some(v) = value {
+            words.push(flag.into());
+            words.push(v);
+        }
+    }
+    let Command::Disturb(d) = Cli::try_parse_from(&words)?.command else {
+        bail!("internal: the tilt check did not parse as `twv disturb`");
+    };
+    let out = super::sim::compute(&super::disturb::experiment(&d)?, &d.model)?;
+    let m = &out.metrics;
+    Ok(TiltCheck {
+        tilt: 0.1,
+        recovered: m.phi.settling_time.is_some() && m.final_phi.abs() < 0.002,
+        settling_time: m.phi.settling_time,
+        overshoot: m.phi.overshoot,
+        peak_force: m.peak_force,
+        final_phi: m.final_phi,
+    })
 }
 
 impl TuneArgs {
@@ -115,10 +169,15 @@ impl ModelTask for Tune<'_> {
         let lin = linearize(model, &OperatingPoint::Upright, &[0.0; NU])?;
         let lp = pitch_loop(&lin, &model.info(), loaded)?;
         let result = tune(&lp, &self.1, &self.0.options()?)?;
+        let tilt_check = match &result.certificate {
+            Some(c) if c.analysis.closed_loop.stable => Some(tilt_check(self.0, &c.gains)?),
+            _ => None,
+        };
         Ok(TuneReport {
             model: loaded.name().to_string(),
             params: loaded.params_origin.clone(),
             result,
+            tilt_check,
         })
     }
 }
@@ -159,6 +218,15 @@ pub fn summary(r: &TuneReport) -> String {
             }
         );
     }
+    if let Some(t) = &r.tilt_check {
+        s += &format!(
+            "  nonlinear check: after a {} rad forward tilt Φ {} (2 % settling {}, peak force {:.1} N)\n",
+            t.tilt,
+            if t.recovered { "recovers" } else { "does NOT recover" },
+            t.settling_time.map_or("—".into(), |v| format!("{v:.3} s")),
+            t.peak_force
+        );
+    }
     if res.status == TuneStatus::Infeasible {
         s += &format!(
             "  infeasible: the best gains found reach {:.1} % of the specification (the method is local: no gains found, not a proof that none exist)\n",
@@ -174,6 +242,11 @@ pub fn run(args: &TuneArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print!("{}", summary(&report));
+    }
+    if report.tilt_check.as_ref().is_some_and(|t| !t.recovered)
+        && report.result.status == TuneStatus::Solved
+    {
+        bail!("the tuned gains meet the linear specification but do not recover from a 0.1 rad tilt on the nonlinear model");
     }
     match report.result.status {
         TuneStatus::Solved => Ok(()),
