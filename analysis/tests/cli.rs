@@ -1,46 +1,19 @@
 //! The `twv` binary end to end: results on stdout, and for bad input one clear message naming
 //! the file, field or value, a non-zero exit, no panic or backtrace, and no partial output.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn twv(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_twv"))
-        .args(args)
-        .env_remove("RUST_BACKTRACE")
-        .output()
-        .expect("the twv binary runs")
-}
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use common::{fails_with, twv};
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// A fresh scratch folder per test.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("twv-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// Expect failure with a one-line message containing every `needle`.
-fn fails_with(out: &Output, needles: &[&str]) -> String {
-    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
-    assert!(
-        !out.status.success(),
-        "expected failure, got success; stderr: {stderr}"
-    );
-    assert_eq!(out.status.code(), Some(1), "exit code; stderr: {stderr}");
-    assert!(
-        !stderr.contains("panicked") && !stderr.contains("backtrace"),
-        "{stderr}"
-    );
-    assert!(stderr.starts_with("twv: error:"), "{stderr}");
-    for n in needles {
-        assert!(stderr.contains(n), "`{n}` missing from: {stderr}");
-    }
-    stderr
+    common::scratch("cli", name)
 }
 
 fn paper_with(dir: &Path, edit: impl Fn(&str) -> String) -> PathBuf {

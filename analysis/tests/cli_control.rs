@@ -3,18 +3,13 @@
 //! closed-form pendulum eigenvalue and gain margin) rather than on snapshots; and for bad input
 //! one clear message, a non-zero exit, no panic and no partial output.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+
+use common::{fails_with, twv};
 
 use serde_json::Value;
-
-fn twv(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_twv"))
-        .args(args)
-        .env_remove("RUST_BACKTRACE")
-        .output()
-        .expect("the twv binary runs")
-}
 
 /// Run and expect success; the stdout.
 fn ok(args: &[&str]) -> String {
@@ -34,31 +29,8 @@ fn json(args: &[&str]) -> Value {
     serde_json::from_str(&ok(&all)).expect("stdout is JSON")
 }
 
-/// A fresh scratch folder per test.
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("twv-cli-control-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// Expect failure with a one-line message containing every `needle`.
-fn fails_with(out: &Output, needles: &[&str]) -> String {
-    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
-    assert!(
-        !out.status.success(),
-        "expected failure, got success; stderr: {stderr}"
-    );
-    assert_eq!(out.status.code(), Some(1), "exit code; stderr: {stderr}");
-    assert!(
-        !stderr.contains("panicked") && !stderr.contains("backtrace"),
-        "{stderr}"
-    );
-    assert!(stderr.starts_with("twv: error:"), "{stderr}");
-    for n in needles {
-        assert!(stderr.contains(n), "`{n}` missing from: {stderr}");
-    }
-    stderr
+    common::scratch("cli-control", name)
 }
 
 fn num(v: &Value) -> f64 {
