@@ -19,22 +19,9 @@ use crate::linear::{
 /// reachable by the pitch force).
 const LQR_STATES: [&str; 4] = ["phi", "x", "w_y", "v_x"];
 
-/// Linear analysis at an equilibrium: modes, pitch-loop margins, LQR.
+/// What sits between the controller and the vehicle (shared by `linear` and `tune`).
 #[derive(Args, Debug, Clone)]
-pub struct LinearArgs {
-    #[command(flatten)]
-    pub model: ModelArgs,
-    /// Operating point: upright, hanging, or a state V1,V2,... (SI units, rad)
-    #[arg(
-        long,
-        value_name = "POINT",
-        default_value = "upright",
-        allow_hyphen_values = true
-    )]
-    pub at: String,
-    /// Pitch PID gains Kp,Ki,Kd [N/rad, N/(rad s), N s/rad]; the study's PD by default
-    #[arg(long, value_name = "KP,KI,KD", default_value = "3860,0,1980")]
-    pub gains: String,
+pub struct LoopArgs {
     /// First-order actuator lag in the loop [s]
     #[arg(
         long,
@@ -51,6 +38,26 @@ pub struct LinearArgs {
         allow_hyphen_values = true
     )]
     pub delay: f64,
+}
+
+/// Linear analysis at an equilibrium: modes, pitch-loop margins, LQR.
+#[derive(Args, Debug, Clone)]
+pub struct LinearArgs {
+    #[command(flatten)]
+    pub model: ModelArgs,
+    /// Operating point: upright, hanging, or a state V1,V2,... (SI units, rad)
+    #[arg(
+        long,
+        value_name = "POINT",
+        default_value = "upright",
+        allow_hyphen_values = true
+    )]
+    pub at: String,
+    /// Pitch PID gains Kp,Ki,Kd [N/rad, N/(rad s), N s/rad]; the study's PD by default
+    #[arg(long, value_name = "KP,KI,KD", default_value = "3860,0,1980")]
+    pub gains: String,
+    #[command(flatten)]
+    pub loop_options: LoopArgs,
     /// LQR state weight (the same for phi, x, w_y, v_x)
     #[arg(
         long,
@@ -126,8 +133,8 @@ impl ModelTask for Linear<'_> {
         let open_loop = modes(&a, &lin.states)?;
         let gains = parse_gains("gains", &args.gains)?;
         let loop_options = LoopOptions {
-            lag: args.actuator_lag,
-            delay: args.delay,
+            lag: args.loop_options.actuator_lag,
+            delay: args.loop_options.delay,
         };
         let pitch = analyse_pitch(&pitch_loop(&lin, &info, loaded)?, &gains, &loop_options)?;
         if !(args.lqr_q > 0.0 && args.lqr_r > 0.0) {

@@ -42,22 +42,8 @@ pub struct TuneArgs {
     /// What to optimise once the spec holds [default: min-gain for PD, max-integral for PID]
     #[arg(long, value_enum)]
     pub objective: Option<ObjectiveArg>,
-    /// First-order actuator lag in the loop [s]
-    #[arg(
-        long,
-        value_name = "S",
-        default_value_t = 0.0,
-        allow_hyphen_values = true
-    )]
-    pub actuator_lag: f64,
-    /// Pure delay in the loop [s]
-    #[arg(
-        long,
-        value_name = "S",
-        default_value_t = 0.0,
-        allow_hyphen_values = true
-    )]
-    pub delay: f64,
+    #[command(flatten)]
+    pub loop_options: super::linear::LoopArgs,
     /// Print JSON instead of the summary
     #[arg(long)]
     pub json: bool,
@@ -149,8 +135,8 @@ impl TuneArgs {
             objective,
             target,
             loop_options: LoopOptions {
-                lag: self.actuator_lag,
-                delay: self.delay,
+                lag: self.loop_options.actuator_lag,
+                delay: self.loop_options.delay,
             },
             ..TuneOptions::default()
         })
