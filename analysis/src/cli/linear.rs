@@ -269,11 +269,5 @@ pub fn summary(r: &LinearReport) -> String {
 }
 
 pub fn run(args: &LinearArgs) -> Result<()> {
-    let report = analyse(args)?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        print!("{}", summary(&report));
-    }
-    Ok(())
+    super::finish(&analyse(args)?, None, args.json, summary)
 }

@@ -342,17 +342,8 @@ pub fn compute(args: &LyapArgs) -> Result<LyapOutput> {
 
 pub fn run(args: &LyapArgs) -> Result<()> {
     let out = compute(args)?;
-    if let Some(dir) = &args.out {
-        for path in write_files(dir, &out)? {
-            eprintln!("wrote {}", path.display());
-        }
-    }
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&out)?);
-    } else {
-        print!("{}", summary(&out));
-    }
-    Ok(())
+    let files = args.out.as_deref().map(|dir| (dir, write_files as _));
+    super::finish(&out, files, args.json, summary)
 }
 
 /// A few readable lines.

@@ -15,6 +15,8 @@ pub mod sim;
 pub mod sweep;
 pub mod tune;
 
+use std::path::{Path, PathBuf};
+
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
@@ -73,4 +75,28 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Sweep(args) => sweep::run(args),
         Command::Merge(args) => sweep::run_merge(args),
     }
+}
+
+/// Writes a command's result files into a folder and returns their paths.
+pub(crate) type WriteFiles<T> = fn(&Path, &T) -> Result<Vec<PathBuf>>;
+
+/// The common ending of a command: write its files (if asked) and name them on stderr, then
+/// print the result as JSON or as its readable summary on stdout.
+pub(crate) fn finish<T: serde::Serialize>(
+    out: &T,
+    files: Option<(&Path, WriteFiles<T>)>,
+    json: bool,
+    summary: fn(&T) -> String,
+) -> Result<()> {
+    if let Some((dir, write)) = files {
+        for path in write(dir, out)? {
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(out)?);
+    } else {
+        print!("{}", summary(out));
+    }
+    Ok(())
 }

@@ -304,17 +304,8 @@ pub fn execute(
     json: bool,
 ) -> Result<()> {
     let result = compute(experiment, model)?;
-    if let Some(dir) = out {
-        for path in write_files(dir, &result)? {
-            eprintln!("wrote {}", path.display());
-        }
-    }
-    if json {
-        println!("{}", serde_json::to_string_pretty(&result)?);
-    } else {
-        print!("{}", summary(&result));
-    }
-    Ok(())
+    let files = out.map(|dir| (dir, write_files as _));
+    super::finish(&result, files, json, summary)
 }
 
 pub fn run(args: &SimArgs) -> Result<()> {

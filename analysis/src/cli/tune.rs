@@ -224,11 +224,7 @@ pub fn summary(r: &TuneReport) -> String {
 
 pub fn run(args: &TuneArgs) -> Result<()> {
     let report = fit(args)?;
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        print!("{}", summary(&report));
-    }
+    super::finish(&report, None, args.json, summary)?;
     if report.tilt_check.as_ref().is_some_and(|t| !t.recovered)
         && report.result.status == TuneStatus::Solved
     {
