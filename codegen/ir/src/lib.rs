@@ -10,6 +10,7 @@ mod error;
 mod hash;
 mod infix;
 mod interp;
+mod lower;
 pub mod ops;
 mod params;
 mod types;

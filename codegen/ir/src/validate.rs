@@ -201,7 +201,7 @@ fn build_function(name: &str, raw: RawFunction, sizes: [usize; 3]) -> Result<Fun
             problem,
         })?;
     }
-    Ok(function)
+    Ok(crate::lower::share_reciprocals(function))
 }
 
 const ARG_NAMES: [&str; 3] = ["x", "u", "p"];

@@ -13,6 +13,8 @@
 //!   non-finite outputs.
 #![no_std]
 
+pub mod trig;
+
 /// Names and descriptive metadata of a model.
 #[derive(Debug, Clone, Copy)]
 pub struct ModelInfo {
