@@ -98,6 +98,20 @@ fn same_model<const NX: usize, const NU: usize>(
             ob.as_flattened(),
             &format!("{what} f_jw"),
         );
+        // The fused f_jw + jac_u (one kernel in generated code, two calls by default).
+        let (mut f3, mut o3, mut u3) = ([0.0; NX], [[0.0; NX]; 3], [[0.0; NU]; NX]);
+        a.f_jw_jac_u(&x, &u, &w, &mut f3, &mut o3, &mut u3);
+        assert_bits(&f3, &f2b, &format!("{what} f_jw_jac_u f"));
+        assert_bits(
+            o3.as_flattened(),
+            ob.as_flattened(),
+            &format!("{what} f_jw_jac_u jw"),
+        );
+        assert_bits(
+            u3.as_flattened(),
+            ub.as_flattened(),
+            &format!("{what} f_jw_jac_u jac_u"),
+        );
     }
 }
 

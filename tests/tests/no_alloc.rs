@@ -1,4 +1,4 @@
-//! Zero heap allocations in the hot methods (f, jac_x, jac_x_sparse, f_jw) of generated and
+//! Zero heap allocations in the hot methods (f, jac_x, jac_x_sparse, f_jw, f_jw_jac_u) of generated and
 //! interpreted models, after construction. Its own test binary because it installs a counting
 //! global allocator; the counter is per thread so the test harness's threads do not interfere.
 
@@ -42,14 +42,16 @@ fn hot_path_allocations<const NX: usize, const NU: usize>(model: &impl Model<NX,
     let w = [[0.3; NX]; 8];
     let (mut f, mut jac, mut jw) = ([0.0; NX], [[0.0; NX]; NX], [[0.0; NX]; 8]);
     let mut sparse = [0.0; 64];
+    let mut ju = [[0.0; NU]; NX];
     let before = allocations();
     model.f(&x, &u, &mut f);
     model.jac_x(&x, &u, &mut jac);
     model.jac_x_sparse(&x, &u, &mut sparse);
     model.f_jw(&x, &u, &w, &mut f, &mut jw);
     model.jw(&x, &u, &w, &mut jw);
+    model.f_jw_jac_u(&x, &u, &w, &mut f, &mut jw, &mut ju);
     let after = allocations();
-    std::hint::black_box((&f, &jac, &jw, &sparse));
+    std::hint::black_box((&f, &jac, &jw, &sparse, &ju));
     after - before
 }
 

@@ -256,7 +256,7 @@ fn constructors(
     }
 }
 
-/// The IR functions `f`, `jac_x`, `jac_u`, `f_jac_x` as non-generic, non-`#[inline]` kernels:
+/// The IR functions `f`, `jac_x`, `jac_u`, `f_jac_x` (and the last two fused) as non-generic, non-`#[inline]` kernels:
 /// they are compiled inside the crate that invokes the macro (twv-generated builds at
 /// opt-level 3 in every profile), where `#[inline]` code would be compiled in each caller at
 /// the caller's opt-level (3x slower kernels in debug test builds). The trait methods below are
@@ -293,6 +293,18 @@ fn kernels(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
             }
             /// Kernel of IR function `f_jac_x`: ẋ into `f`, and the stored entries of ∂f/∂x.
             pub fn kernel_f_jac_x(&self, x: &[f64; #nx], u: &[f64; #nu], f: &mut [f64; #nx]) -> [f64; Self::JAC_NNZ] {
+                #fj_body
+                *f = #fj_f;
+                #fj_values
+            }
+            /// IR functions `f_jac_x` and `jac_u` in one body: the optimiser computes their
+            /// common subexpressions once (same operations on the same values, so the results
+            /// are those of the two kernels).
+            pub fn kernel_f_jac_x_jac_u(&self, x: &[f64; #nx], u: &[f64; #nu], f: &mut [f64; #nx], jac_u: &mut [[f64; #nu]; #nx]) -> [f64; Self::JAC_NNZ] {
+                {
+                    #ju_body
+                    *jac_u = #ju_out;
+                }
                 #fj_body
                 *f = #fj_f;
                 #fj_values
@@ -359,6 +371,22 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                 out: &mut [[f64; #nx]; K],
             ) {
                 let j = self.kernel_f_jac_x(x, u, f);
+                for (wk, ok) in w.iter().zip(out.iter_mut()) {
+                    *ok = [#(#jw),*];
+                }
+            }
+
+            #[inline]
+            fn f_jw_jac_u<const K: usize>(
+                &self,
+                x: &[f64; #nx],
+                u: &[f64; #nu],
+                w: &[[f64; #nx]; K],
+                f: &mut [f64; #nx],
+                out: &mut [[f64; #nx]; K],
+                jac_u: &mut [[f64; #nu]; #nx],
+            ) {
+                let j = self.kernel_f_jac_x_jac_u(x, u, f, jac_u);
                 for (wk, ok) in w.iter().zip(out.iter_mut()) {
                     *ok = [#(#jw),*];
                 }

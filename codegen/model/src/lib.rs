@@ -103,6 +103,23 @@ pub trait Model<const NX: usize, const NU: usize> {
         (0..NX).map(|i| jac[i][i]).sum()
     }
 
+    /// [`f_jw`](Self::f_jw) and the dense ∂f/∂u at the same point: what a closed loop needs
+    /// at every stage (its Jacobian is f_x + f_u u_x). The default calls both; generated code
+    /// evaluates them in one kernel, so their common subexpressions (the factorisation of the
+    /// mass matrix) are computed once, with bit-identical results.
+    fn f_jw_jac_u<const K: usize>(
+        &self,
+        x: &[f64; NX],
+        u: &[f64; NU],
+        w: &[[f64; NX]; K],
+        f: &mut [f64; NX],
+        out: &mut [[f64; NX]; K],
+        jac_u: &mut [[f64; NU]; NX],
+    ) {
+        self.f_jw(x, u, w, f, out);
+        self.jac_u(x, u, jac_u);
+    }
+
     /// `out[k] = (∂f/∂x) w[k]` without ẋ.
     fn jw<const K: usize>(
         &self,
