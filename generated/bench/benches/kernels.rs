@@ -10,6 +10,7 @@ use std::process::ExitCode;
 
 use twv_bench::{compare, gate, time, Casadi, Pair, Plan, Point, Twv, K, NNZ, NX};
 use twv_generated::{baked, Vehicle8};
+use twv_model::Model;
 
 /// One row of the table: twv and CasADi's C for one function and parameter mode.
 fn measure(plan: Plan, function: &str, twv: &impl Twv, c: &Casadi, pt: &Point) -> Pair {
@@ -135,5 +136,32 @@ fn main() -> ExitCode {
     println!(
         "reference, sin and cos of one angle: C library {libm} ns, twv_model::trig {inline} ns"
     );
+
+    // The Lyapunov floor: an RK4 stage cannot start before the previous stage's f is known, so
+    // the study preset (10 s at h = 1e-3: 40 000 stages) costs at least 40 000 times the
+    // latency of one dependent f call even without tangent vectors, and in practice that of
+    // f_jw, whatever the integrator around it does.
+    println!();
+    let mut x = pt.x;
+    let f_latency = time(plan, || {
+        let mut f = [0.0; NX];
+        runtime.f(&x, &pt.u, &mut f);
+        // Feed the result back at a scale that leaves the point unchanged in practice.
+        x[0] += 1e-300 * f[4];
+    });
+    let mut state = pt;
+    let jw_latency = time(plan, || {
+        let (mut f, mut out) = ([0.0; NX], [[0.0; NX]; K]);
+        runtime.f_jw::<K>(&state.x, &state.u, &state.w, &mut f, &mut out);
+        state.x[0] += 1e-300 * (f[4] + out[7][4]);
+        state.w[0][0] += 1e-300 * out[0][5];
+    });
+    println!("dependent chains (each call waits for the previous result), runtime parameters:");
+    for (what, stats) in [("f", f_latency), ("f_jw (K=8)", jw_latency)] {
+        println!(
+            "  {what}: {stats} ns per call; 40 000 calls (the study's Lyapunov preset) {:.2} ms",
+            stats.median * 40_000.0 / 1e6
+        );
+    }
     ExitCode::SUCCESS
 }
