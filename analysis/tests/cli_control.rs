@@ -516,6 +516,11 @@ fn non_positive_magnitude_and_times_are_rejected() {
         }
     }
     fails_with(&twv(&["sim", "--sample", "0"]), &["sample", "> 0"]);
+    // A run too long to hold in memory is refused up front, not after hours.
+    fails_with(
+        &twv(&["sim", "--t-end", "1e9"]),
+        &["number of samples", "100000000000", "sample interval"],
+    );
     fails_with(&twv(&["sim", "--fall-angle", "-1"]), &["fall angle", "-1"]);
     fails_with(&twv(&["linear", "--delay", "-1"]), &["delay", "-1"]);
     fails_with(&twv(&["tune", "--actuator-lag", "-1"]), &["lag", "-1"]);

@@ -33,6 +33,12 @@ fn quick_report_is_complete_and_consistent() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // The internal sweep writes to a scratch folder it removes: nothing about it on stderr.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !stderr.contains("shard-"),
+        "scratch sweep output leaked:\n{stderr}"
+    );
     let html = std::fs::read_to_string(dir.join("index.html")).unwrap();
     let figures: Vec<PathBuf> = std::fs::read_dir(dir.join("figures"))
         .unwrap()

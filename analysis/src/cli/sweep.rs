@@ -76,6 +76,9 @@ pub struct SweepArgs {
     /// Recompute the shard even if its file is complete
     #[arg(long)]
     pub force: bool,
+    /// No progress bar and no summary on stderr (errors are still reported)
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 /// Merge the shards of a sweep into map.csv, map.json and map.svg.
@@ -220,7 +223,11 @@ fn compute(
     config: &SweepConfig,
     range: Range<usize>,
 ) -> Result<Vec<PointResult>> {
-    let progress = ProgressBar::new(range.len() as u64);
+    let progress = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(range.len() as u64)
+    };
     progress.set_style(
         ProgressStyle::with_template("{bar:40} {pos}/{len} points, {elapsed} (eta {eta})")
             .expect("a valid template"),
@@ -275,7 +282,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     if path.exists() && !args.force {
         match ShardFile::read(&path) {
             Ok(file) if file.is_complete_for(&config, shard) => {
-                eprintln!("{}: complete, skipped", path.display());
+                if !args.quiet {
+                    eprintln!("{}: complete, skipped", path.display());
+                }
                 return Ok(());
             }
             Ok(file) if file.config_hash != config.hash() => bail!(
@@ -285,6 +294,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
                 file.config_hash,
                 config.hash()
             ),
+            _ if args.quiet => {}
             _ => eprintln!("{}: incomplete or unreadable, recomputing", path.display()),
         }
     }
@@ -307,7 +317,9 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         count(Status::Failed)
     );
     let written = ShardFile::new(config, shard, points).write(&args.out)?;
-    eprintln!("{summary}\nwrote {}", written.display());
+    if !args.quiet {
+        eprintln!("{summary}\nwrote {}", written.display());
+    }
     Ok(())
 }
 

@@ -7,6 +7,9 @@ use super::error::ControlError;
 use crate::integrate::{Dopri5, Rk4, Stepper, VectorField};
 use crate::lyapunov::IntegratorChoice;
 
+/// The most samples one run may record (t_end / sample interval).
+pub const MAX_SAMPLES: f64 = 2e6;
+
 /// How long and how finely to run. Defaults are beside each field.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RunSettings {
@@ -47,6 +50,15 @@ impl RunSettings {
             self.sample,
             self.sample > 0.0 && self.sample <= self.t_end,
             "must be finite, > 0 and ≤ t_end",
+        )?;
+        // Every sample is kept in memory and written out: cap the table at a size a person can
+        // still open (and the machine can hold), rather than run out of memory hours later.
+        let samples = self.t_end / self.sample;
+        check(
+            "t_end / sample interval (number of samples)",
+            samples,
+            samples <= MAX_SAMPLES,
+            "must be ≤ 2e6: raise the sample interval or shorten the run",
         )?;
         if let Some(a) = self.fall_angle {
             check("fall angle [rad]", a, a > 0.0, "must be > 0")?;

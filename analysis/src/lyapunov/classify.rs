@@ -75,7 +75,7 @@ impl fmt::Display for Classification {
             ),
             Classification::Neutral { zero, .. } => write!(
                 f,
-                "all exponents ≤ 0 within error, {zero} consistent with zero: a periodic or quasi-periodic attractor or a marginally stable set (finite-time estimate)"
+                "all exponents ≤ 0 within error, {zero} consistent with zero: a marginally stable set (zero exponents come from symmetry directions such as position and heading, and from uncontrolled drift) or a periodic or quasi-periodic attractor (finite-time estimate)"
             ),
             Classification::Positive { positive: 1 } => write!(
                 f,

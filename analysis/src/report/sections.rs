@@ -500,6 +500,7 @@ fn stability_map(settings: &ReportSettings, r: &mut Report) -> Result<()> {
         "0/1",
         "--out",
         &out,
+        "--quiet",
     ];
     let args = match command(&words(&list, settings))? {
         Command::Sweep(args) => args,
