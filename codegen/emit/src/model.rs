@@ -324,6 +324,12 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
     let jac = p.output("jac_x", "jac_x")?;
     let jx_dense = dense_from_stored(jac);
     let jw = jw_rows(jac);
+    // out[k] = J w[k] from the stored entries `j`, shared by every f_jw variant.
+    let jw_loop = quote! {
+        for (wk, ok) in w.iter().zip(out.iter_mut()) {
+            *ok = [#(#jw),*];
+        }
+    };
     let trace = trace_from_stored(jac);
     let allow = allow();
     Ok(quote! {
@@ -371,9 +377,7 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                 out: &mut [[f64; #nx]; K],
             ) {
                 let j = self.kernel_f_jac_x(x, u, f);
-                for (wk, ok) in w.iter().zip(out.iter_mut()) {
-                    *ok = [#(#jw),*];
-                }
+                #jw_loop
             }
 
             #[inline]
@@ -387,9 +391,7 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                 jac_u: &mut [[f64; #nu]; #nx],
             ) {
                 let j = self.kernel_f_jac_x_jac_u(x, u, f, jac_u);
-                for (wk, ok) in w.iter().zip(out.iter_mut()) {
-                    *ok = [#(#jw),*];
-                }
+                #jw_loop
             }
 
             #[inline]
@@ -402,9 +404,7 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                 out: &mut [[f64; #nx]; K],
             ) -> f64 {
                 let j = self.kernel_f_jac_x(x, u, f);
-                for (wk, ok) in w.iter().zip(out.iter_mut()) {
-                    *ok = [#(#jw),*];
-                }
+                #jw_loop
                 #trace
             }
         }
