@@ -282,9 +282,7 @@ pub fn run(args: &SweepArgs) -> Result<()> {
     if path.exists() && !args.force {
         match ShardFile::read(&path) {
             Ok(file) if file.is_complete_for(&config, shard) => {
-                if !args.quiet {
-                    eprintln!("{}: complete, skipped", path.display());
-                }
+                say(args, format_args!("{}: complete, skipped", path.display()));
                 return Ok(());
             }
             Ok(file) if file.config_hash != config.hash() => bail!(
@@ -294,8 +292,10 @@ pub fn run(args: &SweepArgs) -> Result<()> {
                 file.config_hash,
                 config.hash()
             ),
-            _ if args.quiet => {}
-            _ => eprintln!("{}: incomplete or unreadable, recomputing", path.display()),
+            _ => say(
+                args,
+                format_args!("{}: incomplete or unreadable, recomputing", path.display()),
+            ),
         }
     }
     let start = Instant::now();
@@ -317,10 +317,15 @@ pub fn run(args: &SweepArgs) -> Result<()> {
         count(Status::Failed)
     );
     let written = ShardFile::new(config, shard, points).write(&args.out)?;
-    if !args.quiet {
-        eprintln!("{summary}\nwrote {}", written.display());
-    }
+    say(args, format_args!("{summary}\nwrote {}", written.display()));
     Ok(())
+}
+
+/// A line on stderr, unless `--quiet`.
+fn say(args: &SweepArgs, line: std::fmt::Arguments) {
+    if !args.quiet {
+        eprintln!("{line}");
+    }
 }
 
 pub fn run_merge(args: &MergeArgs) -> Result<()> {

@@ -377,7 +377,8 @@ where
             let wx: [[f64; NX]; K] = core::array::from_fn(|k| core::array::from_fn(|i| w[k][i]));
             let mut jwx = [[0.0; NX]; K];
             let mut b = [[0.0; NU]; NX];
-            (self.model).f_jw_jac_u(&x, &law.cmd.u, &wx, &mut fx, &mut jwx, &mut b);
+            self.model
+                .f_jw_jac_u(&x, &law.cmd.u, &wx, &mut fx, &mut jwx, &mut b);
             for ((out, wk), jx) in jw.iter_mut().zip(w).zip(&jwx) {
                 let du = self.du(&law, wk);
                 for i in 0..NX {

@@ -21,8 +21,8 @@ pub trait FeedbackLaw<const NX: usize, const NU: usize> {
 /// ẋ = f(x, k(t, x)): a model closed by a static feedback law.
 ///
 /// The tangent uses the exact closed-loop Jacobian J_cl = ∂f/∂x + ∂f/∂u ∂k/∂x: the model's
-/// `f_jw` gives (∂f/∂x) w, and each tangent vector gets ∂f/∂u (∂k/∂x w) added, which costs one
-/// `jac_u` per stage and 2·NU·NX multiply-adds per vector (cheaper than forming J_cl when
+/// `f_jw_jac_u` gives (∂f/∂x) w and ∂f/∂u from one kernel, and each tangent vector gets
+/// ∂f/∂u (∂k/∂x w) added, 2·NU·NX multiply-adds per vector (cheaper than forming J_cl when
 /// NU < NX).
 #[derive(Debug)]
 pub struct ClosedLoop<'a, M, L, const NU: usize> {
@@ -91,11 +91,15 @@ where
         jw: &mut [[f64; NX]; K],
     ) {
         let u = self.law.input(t, x);
-        self.model.f_jw(x, &u, w, f, jw);
         if K == 0 {
+            self.model.f_jw(x, &u, w, f, jw);
             return;
         }
-        let JacPair { b, kx } = input_jacobians(self.model, &self.law, t, x, &u);
+        // ∂f/∂u from the same kernel as ∂f/∂x (their common subexpressions computed once).
+        let mut b = [[0.0; NU]; NX];
+        self.model.f_jw_jac_u(x, &u, w, f, jw, &mut b);
+        let mut kx = [[0.0; NX]; NU];
+        self.law.jacobian(t, x, &mut kx);
         for (wk, out) in w.iter().zip(jw.iter_mut()) {
             // du = (∂k/∂x) w_k, then out += (∂f/∂u) du.
             let du: [f64; NU] = core::array::from_fn(|j| dot(&kx[j], wk));

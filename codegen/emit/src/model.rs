@@ -256,10 +256,10 @@ fn constructors(
     }
 }
 
-/// The IR functions `f`, `jac_x`, `jac_u`, `f_jac_x` (and the last two fused) as non-generic, non-`#[inline]` kernels:
-/// they are compiled inside the crate that invokes the macro (twv-generated builds at
-/// opt-level 3 in every profile), where `#[inline]` code would be compiled in each caller at
-/// the caller's opt-level (3x slower kernels in debug test builds). The trait methods below are
+/// The IR functions `f`, `jac_x`, `jac_u`, `f_jac_x` (and the last two fused) as non-generic,
+/// non-`#[inline]` kernels: they are compiled inside the crate that invokes the macro
+/// (twv-generated builds at opt-level 3 in every profile), where `#[inline]` code would be
+/// compiled in each caller at the caller's opt-level (3x slower kernels in debug test builds). The trait methods below are
 /// `#[inline]` wrappers, so release builds lose one call, as with CasADi's C.
 fn kernels(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
     let (nx, nu) = (&p.nx, &p.nu);

@@ -19,7 +19,7 @@ pub(crate) fn share_reciprocals(f: Function) -> Function {
     if !(f.instructions.iter()).any(|i| matches!(i, Instr::Binary(BinaryOp::Div, ..))) {
         return f;
     }
-    // New id of each old value, and of the reciprocal of each shared denominator once emitted.
+    // New id of each old value, and of each denominator's reciprocal once emitted.
     let mut new_id = Vec::with_capacity(f.instructions.len());
     let mut reciprocal: Vec<Option<usize>> = vec![None; f.instructions.len()];
     let mut instructions = Vec::with_capacity(f.instructions.len() + 8);
