@@ -155,21 +155,48 @@ pub fn matrix_expr(o: &Output) -> TokenStream {
     quote!([#(#rows),*])
 }
 
-/// For each row of ∂f/∂x, `(∂f/∂x)_row · wk` over the stored entries `j[e]`, summed left to
-/// right in increasing column order (the interpreter's order), or `0.0` for an empty row.
-pub fn jw_rows(jac: &Output) -> Vec<TokenStream> {
-    let mut rows: Vec<Vec<TokenStream>> = vec![Vec::new(); jac.rows];
+/// `out[k] = Σ_c J[:, c] · w[k][c]` over the columns of ∂f/∂x that have stored entries (in
+/// increasing order), from the stored entries `j`, in the column form of `twv_model::columns`
+/// (the interpreter computes the same operations).
+pub fn jw_columns(jac: &Output) -> TokenStream {
+    let mut columns: Vec<(usize, Vec<TokenStream>)> = Vec::new();
     for (e, (r, c, _)) in jac.entries().enumerate() {
-        let (e, c) = (index(e), index(c));
-        rows[r].push(quote!(j[#e] * wk[#c]));
+        if columns.last().is_none_or(|(last, _)| *last != c) {
+            columns.push((c, vec![quote!(zero); jac.rows]));
+        }
+        if let Some((_, column)) = columns.last_mut() {
+            let e = index(e);
+            column[r] = quote!(::twv_model::columns::opaque(j[#e]));
+        }
     }
-    rows.into_iter()
-        .map(|terms| {
-            if terms.is_empty() {
-                quote!(0.0)
-            } else {
-                quote!(#(#terms)+*)
+    let rows = index(jac.rows);
+    let Some(((first, _), rest)) = columns.split_first() else {
+        return quote! {
+            for ok in out.iter_mut() {
+                *ok = [0.0; #rows];
             }
-        })
-        .collect()
+        };
+    };
+    let first = index(*first);
+    let rest_steps = rest.iter().enumerate().map(|(n, (c, _))| {
+        let (n, c) = (index(n + 1), index(*c));
+        quote!(::twv_model::columns::add_scaled(&mut acc, &cols[#n], wk[#c]);)
+    });
+    let ncols = index(columns.len());
+    let grid = columns.iter().map(|(_, column)| quote!([#(#column),*]));
+    quote! {
+        // Opaque entries: otherwise the optimiser treats each lane of a column on its own
+        // (structural zeros, entries that are 1 or the negation of another) and turns one
+        // vector multiply-add per column into several shuffled scalar and vector operations.
+        let zero = ::twv_model::columns::opaque(0.0);
+        let cols: [[f64; #rows]; #ncols] = [#(#grid),*];
+        for (wk, ok) in w.iter().zip(out.iter_mut()) {
+            // An opaque address: otherwise the optimiser vectorises across the tangent vectors
+            // (with gathers and scatters, slower than scalar code) instead of along the columns.
+            let wk = ::core::hint::black_box(wk);
+            let mut acc = ::twv_model::columns::scaled(&cols[0], wk[#first]);
+            #(#rest_steps)*
+            *ok = acc;
+        }
+    }
 }

@@ -1,10 +1,10 @@
 //! The emitted model: a struct, its constants and metadata, and the trait impls.
 
 use proc_macro2::{Ident, TokenStream};
-use quote::quote;
+use quote::{format_ident, quote};
 use twv_ir::{Arg, Function, Ir, Kind, Output};
 
-use crate::body::{float, index, jw_rows, lets, matrix_expr, vector_expr};
+use crate::body::{float, index, jw_columns, lets, matrix_expr, vector_expr};
 use crate::{EmitError, Params};
 
 /// (function, values, operations) of every function of the IR, in name order.
@@ -256,61 +256,149 @@ fn constructors(
     }
 }
 
-/// The IR functions `f`, `jac_x`, `jac_u`, `f_jac_x` (and the last two fused) as non-generic,
-/// non-`#[inline]` kernels: they are compiled inside the crate that invokes the macro
-/// (twv-generated builds at opt-level 3 in every profile), where `#[inline]` code would be
-/// compiled in each caller at the caller's opt-level (3x slower kernels in debug test builds). The trait methods below are
-/// `#[inline]` wrappers, so release builds lose one call, as with CasADi's C.
+/// The kernels: the IR functions `f`, `jac_x`, `jac_u`, `f_jac_x`, and the variational kernel
+/// (`f_jac_x` with J·W, tr J and optionally `jac_u`), as non-generic, non-`#[inline]` methods:
+/// they are compiled inside the crate that invokes the macro (twv-generated builds at opt-level
+/// 3 in every profile), where `#[inline]` code would be compiled in each caller at the caller's
+/// opt-level (3x slower kernels in debug test builds). The trait methods below are `#[inline]`
+/// wrappers, so release builds lose one call, as with CasADi's C. Each kernel is built twice
+/// ([`multiversion`]).
 fn kernels(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
     let (nx, nu) = (&p.nx, &p.nu);
-    let f_body = p.lets("f", true)?;
-    let f_out = vector_expr(p.output("f", "f")?);
-    let jx_body = p.lets("jac_x", true)?;
-    let jx_values = stored_values(p.output("jac_x", "jac_x")?);
-    let ju_body = p.lets("jac_u", true)?;
-    let ju_out = matrix_expr(p.output("jac_u", "jac_u")?);
+    let jac = p.output("f_jac_x", "jac_x")?;
+    let jw = jw_columns(jac);
+    let trace = trace_from_stored(jac);
+    let f = multiversion(
+        "kernel_f",
+        "Kernel of IR function `f`: ẋ.",
+        quote!(x: &[f64; #nx], u: &[f64; #nu], out: &mut [f64; #nx]),
+        quote!(x, u, out),
+        quote!(),
+        {
+            let (body, out) = (p.lets("f", true)?, vector_expr(p.output("f", "f")?));
+            quote!(#body *out = #out;)
+        },
+    );
+    let jac_x = multiversion(
+        "kernel_jac_x",
+        "Kernel of IR function `jac_x`: the stored entries of ∂f/∂x (CCS order).",
+        quote!(x: &[f64; #nx], u: &[f64; #nu]),
+        quote!(x, u),
+        quote!(-> [f64; Self::JAC_NNZ]),
+        {
+            let body = p.lets("jac_x", true)?;
+            let values = stored_values(p.output("jac_x", "jac_x")?);
+            quote!(#body #values)
+        },
+    );
+    let (ju_body, ju_out) = (
+        p.lets("jac_u", true)?,
+        matrix_expr(p.output("jac_u", "jac_u")?),
+    );
+    let jac_u = multiversion(
+        "kernel_jac_u",
+        "Kernel of IR function `jac_u`: dense ∂f/∂u, row-major.",
+        quote!(x: &[f64; #nx], u: &[f64; #nu], out: &mut [[f64; #nu]; #nx]),
+        quote!(x, u, out),
+        quote!(),
+        quote!(#ju_body *out = #ju_out;),
+    );
     let fj_body = p.lets("f_jac_x", true)?;
     let fj_f = vector_expr(p.output("f_jac_x", "f")?);
-    let fj_values = stored_values(p.output("f_jac_x", "jac_x")?);
+    let fj_values = stored_values(jac);
+    let f_jac_x = multiversion(
+        "kernel_f_jac_x",
+        "Kernel of IR function `f_jac_x`: ẋ into `f`, and the stored entries of ∂f/∂x.",
+        quote!(x: &[f64; #nx], u: &[f64; #nu], f: &mut [f64; #nx]),
+        quote!(x, u, f),
+        quote!(-> [f64; Self::JAC_NNZ]),
+        quote!(#fj_body *f = #fj_f; #fj_values),
+    );
+    let variational = multiversion(
+        "kernel_variational",
+        "The variational kernel: ẋ into `f`, `out[k] = (∂f/∂x) w[k]`, ∂f/∂u into `jac_u` when \
+         asked, and tr(∂f/∂x) as the result. `jac_u` comes after IR function `f_jac_x` in \
+         the same body, so the optimiser reuses their common subexpressions (the mass-matrix \
+         factorisation); same operations on the same values, so the results are those of the \
+         separate kernels. Slices, not `[_; K]`, so one non-generic kernel serves every K.",
+        quote!(
+            x: &[f64; #nx],
+            u: &[f64; #nu],
+            w: &[[f64; #nx]],
+            f: &mut [f64; #nx],
+            out: &mut [[f64; #nx]],
+            jac_u: ::core::option::Option<&mut [[f64; #nu]; #nx]>
+        ),
+        quote!(x, u, w, f, out, jac_u),
+        quote!(-> f64),
+        quote! {
+            #fj_body
+            *f = #fj_f;
+            let j: [f64; Self::JAC_NNZ] = #fj_values;
+            if let ::core::option::Option::Some(jac_u) = jac_u {
+                #ju_body
+                *jac_u = #ju_out;
+            }
+            #jw
+            #trace
+        },
+    );
     let allow = allow();
     Ok(quote! {
         #allow
         impl #name {
-            /// Kernel of IR function `f`: ẋ.
-            pub fn kernel_f(&self, x: &[f64; #nx], u: &[f64; #nu], out: &mut [f64; #nx]) {
-                #f_body
-                *out = #f_out;
-            }
-            /// Kernel of IR function `jac_x`: the stored entries of ∂f/∂x (CCS order).
-            pub fn kernel_jac_x(&self, x: &[f64; #nx], u: &[f64; #nu]) -> [f64; Self::JAC_NNZ] {
-                #jx_body
-                #jx_values
-            }
-            /// Kernel of IR function `jac_u`: dense ∂f/∂u, row-major.
-            pub fn kernel_jac_u(&self, x: &[f64; #nx], u: &[f64; #nu], out: &mut [[f64; #nu]; #nx]) {
-                #ju_body
-                *out = #ju_out;
-            }
-            /// Kernel of IR function `f_jac_x`: ẋ into `f`, and the stored entries of ∂f/∂x.
-            pub fn kernel_f_jac_x(&self, x: &[f64; #nx], u: &[f64; #nu], f: &mut [f64; #nx]) -> [f64; Self::JAC_NNZ] {
-                #fj_body
-                *f = #fj_f;
-                #fj_values
-            }
-            /// IR functions `f_jac_x` and `jac_u` in one body: the optimiser computes their
-            /// common subexpressions once (same operations on the same values, so the results
-            /// are those of the two kernels).
-            pub fn kernel_f_jac_x_jac_u(&self, x: &[f64; #nx], u: &[f64; #nu], f: &mut [f64; #nx], jac_u: &mut [[f64; #nu]; #nx]) -> [f64; Self::JAC_NNZ] {
-                {
-                    #ju_body
-                    *jac_u = #ju_out;
-                }
-                #fj_body
-                *f = #fj_f;
-                #fj_values
-            }
+            #f
+            #jac_x
+            #jac_u
+            #f_jac_x
+            #variational
         }
     })
+}
+
+/// One kernel built twice behind one entry point `name`: `name_baseline` for the target's
+/// baseline instruction set, `name_avx512` for AVX-512F+VL (32 registers, 8-wide J·W columns),
+/// chosen at run time by `twv_model::isa::avx512()`. Both call the same `#[inline(always)]` body,
+/// so both perform the same IEEE operations in the same order: same bits, different speed.
+fn multiversion(
+    name: &str,
+    doc: &str,
+    params: TokenStream,
+    args: TokenStream,
+    ret: TokenStream,
+    body: TokenStream,
+) -> TokenStream {
+    let entry = format_ident!("{name}");
+    let baseline = format_ident!("{name}_baseline");
+    let avx512 = format_ident!("{name}_avx512");
+    let inlined = format_ident!("{name}_body");
+    let baseline_doc = format!(
+        "[`Self::{name}`] built for the target's baseline instruction set: what runs where \
+         AVX-512 is missing (public so tests can compare the two builds bit for bit)."
+    );
+    quote! {
+        #[doc = #doc]
+        pub fn #entry(&self, #params) #ret {
+            if ::twv_model::isa::avx512() {
+                // SAFETY: `avx512()` is true only when the CPU and the OS support AVX-512F and
+                // AVX-512VL, the features this build was compiled for.
+                return unsafe { self.#avx512(#args) };
+            }
+            self.#baseline(#args)
+        }
+        #[doc = #baseline_doc]
+        pub fn #baseline(&self, #params) #ret {
+            self.#inlined(#args)
+        }
+        #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx512f,avx512vl"))]
+        unsafe fn #avx512(&self, #params) #ret {
+            self.#inlined(#args)
+        }
+        #[inline(always)]
+        fn #inlined(&self, #params) #ret {
+            #body
+        }
+    }
 }
 
 /// `[vA, vB, ...]`: the value of each stored entry, in CCS order.
@@ -323,14 +411,6 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
     let (nx, nu) = (&p.nx, &p.nu);
     let jac = p.output("jac_x", "jac_x")?;
     let jx_dense = dense_from_stored(jac);
-    let jw = jw_rows(jac);
-    // out[k] = J w[k] from the stored entries `j`, shared by every f_jw variant.
-    let jw_loop = quote! {
-        for (wk, ok) in w.iter().zip(out.iter_mut()) {
-            *ok = [#(#jw),*];
-        }
-    };
-    let trace = trace_from_stored(jac);
     let allow = allow();
     Ok(quote! {
         #allow
@@ -376,8 +456,7 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                 f: &mut [f64; #nx],
                 out: &mut [[f64; #nx]; K],
             ) {
-                let j = self.kernel_f_jac_x(x, u, f);
-                #jw_loop
+                self.kernel_variational(x, u, w, f, out, ::core::option::Option::None);
             }
 
             #[inline]
@@ -390,8 +469,7 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                 out: &mut [[f64; #nx]; K],
                 jac_u: &mut [[f64; #nu]; #nx],
             ) {
-                let j = self.kernel_f_jac_x_jac_u(x, u, f, jac_u);
-                #jw_loop
+                self.kernel_variational(x, u, w, f, out, ::core::option::Option::Some(jac_u));
             }
 
             #[inline]
@@ -403,9 +481,7 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                 f: &mut [f64; #nx],
                 out: &mut [[f64; #nx]; K],
             ) -> f64 {
-                let j = self.kernel_f_jac_x(x, u, f);
-                #jw_loop
-                #trace
+                self.kernel_variational(x, u, w, f, out, ::core::option::Option::None)
             }
         }
     })

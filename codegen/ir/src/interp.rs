@@ -3,7 +3,6 @@
 //! generated code is tested against and the way to analyse a user's IR file without recompiling.
 
 use std::cell::RefCell;
-use std::ops::Range;
 use std::sync::Arc;
 
 use twv_model::{Mechanical, Model, ModelInfo};
@@ -48,10 +47,10 @@ impl Function {
 struct Program {
     ir: Ir,
     info: ModelInfo,
-    /// Per row of ∂f/∂x, its entries in `jw_entries`.
-    jw_rows: Vec<Range<usize>>,
-    /// (column, value id in `f_jac_x`) of each stored entry, row by row, columns increasing.
-    jw_entries: Vec<(usize, usize)>,
+    /// The columns of ∂f/∂x with stored entries, increasing, each with the value id in
+    /// `f_jac_x` of its entry in every row (`None`: structural zero): the column form of J·W
+    /// that the generated code uses (`twv_model::columns`).
+    jw_columns: Vec<(usize, Vec<Option<usize>>)>,
     work_len: usize,
 }
 
@@ -77,18 +76,16 @@ impl Program {
             inputs: leak_names(ir.inputs().iter().map(|s| &s.name)),
             params: leak_names(ir.params().iter().map(|p| &p.name)),
         };
-        let mut by_row: Vec<Vec<(usize, usize)>> = vec![Vec::new(); ir.nx()];
+        let mut jw_columns: Vec<(usize, Vec<Option<usize>>)> = Vec::new();
         if let Some(jac) = ir.output("f_jac_x", "jac_x") {
             for (r, c, v) in jac.entries() {
-                by_row[r].push((c, v));
+                if jw_columns.last().is_none_or(|(last, _)| *last != c) {
+                    jw_columns.push((c, vec![None; ir.nx()]));
+                }
+                if let Some((_, column)) = jw_columns.last_mut() {
+                    column[r] = Some(v);
+                }
             }
-        }
-        let mut jw_rows = Vec::with_capacity(ir.nx());
-        let mut jw_entries = Vec::new();
-        for row in by_row {
-            let start = jw_entries.len();
-            jw_entries.extend(row);
-            jw_rows.push(start..jw_entries.len());
         }
         let work_len = ir
             .functions()
@@ -99,8 +96,7 @@ impl Program {
         Program {
             ir: ir.clone(),
             info,
-            jw_rows,
-            jw_entries,
+            jw_columns,
             work_len,
         }
     }
@@ -304,14 +300,14 @@ impl<const NX: usize, const NU: usize> Model<NX, NU> for Interpreted<NX, NU> {
                 o.entries().for_each(|(r, _, v)| f[r] = vals[v]);
             }
             for (wk, ok) in w.iter().zip(out.iter_mut()) {
-                for (slot, range) in ok.iter_mut().zip(&p.jw_rows) {
-                    // The generated code's order: first term, then left to right.
-                    let mut terms = p.jw_entries[range.clone()]
-                        .iter()
-                        .map(|&(c, v)| vals[v] * wk[c]);
-                    *slot = terms
-                        .next()
-                        .map_or(0.0, |first| terms.fold(first, |acc, t| acc + t));
+                // The generated code's operations: the first column's products, then each
+                // further column's products added, structural zeros as 0.0.
+                ok.fill(0.0);
+                for (n, (c, column)) in p.jw_columns.iter().enumerate() {
+                    for (slot, entry) in ok.iter_mut().zip(column) {
+                        let term = entry.map_or(0.0, |v| vals[v]) * wk[*c];
+                        *slot = if n == 0 { term } else { *slot + term };
+                    }
                 }
             }
         });

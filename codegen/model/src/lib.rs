@@ -13,6 +13,8 @@
 //!   non-finite outputs.
 #![no_std]
 
+pub mod columns;
+pub mod isa;
 pub mod trig;
 
 /// Names and descriptive metadata of a model.

@@ -1,0 +1,117 @@
+//! Every generated kernel is built twice — for the x86-64 baseline and for AVX-512 — and
+//! `twv_model::isa` picks one at run time. Rust never fuses a multiplication and an addition on
+//! its own, so the two builds must give the same bits: checked here for every kernel of every
+//! shipped model, runtime and baked, at random points (angles beyond the inline sin/cos range
+//! included, so its C-library branch runs in both builds).
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use twv_generated::{baked, HenonHeiles, Lorenz, Segway7, Vehicle7, Vehicle8};
+
+#[track_caller]
+fn assert_bits(a: &[f64], b: &[f64], what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}: lengths");
+    for (i, (x, y)) in a.iter().zip(b).enumerate() {
+        assert_eq!(x.to_bits(), y.to_bits(), "{what}[{i}]: {x:e} vs {y:e}");
+    }
+}
+
+fn random_point<const NX: usize, const NU: usize>(rng: &mut ChaCha8Rng) -> ([f64; NX], [f64; NU]) {
+    // Mostly moderate states; every eighth point far out (|x| up to 1e7 reaches the C library
+    // branch of twv_model::trig::sin_cos).
+    let scale = if rng.gen_range(0..8) == 0 { 1e7 } else { 3.0 };
+    (
+        std::array::from_fn(|_| rng.gen_range(-scale..scale)),
+        std::array::from_fn(|_| rng.gen_range(-50.0..50.0)),
+    )
+}
+
+/// The dispatching kernels (the AVX-512 build where the CPU has it) against the baseline
+/// builds, at 500 random points, with 1, 2 and NX tangent vectors.
+macro_rules! both_builds_agree {
+    ($model:expr, $nx:literal, $nu:literal, $what:expr) => {{
+        let m = $model;
+        let what = $what;
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for _ in 0..500 {
+            let (x, u) = random_point::<$nx, $nu>(&mut rng);
+            let (mut a, mut b) = ([0.0; $nx], [0.0; $nx]);
+            m.kernel_f(&x, &u, &mut a);
+            m.kernel_f_baseline(&x, &u, &mut b);
+            assert_bits(&a, &b, &format!("{what} f"));
+            assert_bits(
+                &m.kernel_jac_x(&x, &u),
+                &m.kernel_jac_x_baseline(&x, &u),
+                &format!("{what} jac_x"),
+            );
+            let (mut ja, mut jb) = ([[0.0; $nu]; $nx], [[0.0; $nu]; $nx]);
+            m.kernel_jac_u(&x, &u, &mut ja);
+            m.kernel_jac_u_baseline(&x, &u, &mut jb);
+            assert_bits(
+                ja.as_flattened(),
+                jb.as_flattened(),
+                &format!("{what} jac_u"),
+            );
+            let (ea, eb) = (
+                m.kernel_f_jac_x(&x, &u, &mut a),
+                m.kernel_f_jac_x_baseline(&x, &u, &mut b),
+            );
+            assert_bits(&ea, &eb, &format!("{what} f_jac_x entries"));
+            assert_bits(&a, &b, &format!("{what} f_jac_x f"));
+            for k in [1, 2, $nx] {
+                let w: Vec<[f64; $nx]> = (0..k)
+                    .map(|_| std::array::from_fn(|_| rng.gen_range(-1.0..1.0)))
+                    .collect();
+                let (mut oa, mut ob) = (vec![[0.0; $nx]; k], vec![[0.0; $nx]; k]);
+                let ta = m.kernel_variational(&x, &u, &w, &mut a, &mut oa, Some(&mut ja));
+                let tb = m.kernel_variational_baseline(&x, &u, &w, &mut b, &mut ob, Some(&mut jb));
+                let tag = format!("{what} variational K={k}");
+                assert_bits(&a, &b, &format!("{tag} f"));
+                assert_bits(oa.as_flattened(), ob.as_flattened(), &format!("{tag} J·W"));
+                assert_bits(
+                    ja.as_flattened(),
+                    jb.as_flattened(),
+                    &format!("{tag} jac_u"),
+                );
+                assert_bits(&[ta], &[tb], &format!("{tag} trace"));
+            }
+        }
+    }};
+}
+
+#[test]
+fn avx512_and_baseline_builds_agree_bit_for_bit() {
+    if !twv_model::isa::avx512() {
+        eprintln!(
+            "note: this CPU has no AVX-512F/VL, so both calls ran the baseline build; the \
+             comparison is only meaningful on an AVX-512 machine (the CI machines have it)"
+        );
+    }
+    both_builds_agree!(Vehicle8::with_defaults(), 8, 2, "vehicle8");
+    both_builds_agree!(baked::Vehicle8, 8, 2, "baked vehicle8");
+    both_builds_agree!(Vehicle7::with_defaults(), 7, 2, "vehicle7");
+    both_builds_agree!(baked::Vehicle7, 7, 2, "baked vehicle7");
+    both_builds_agree!(Segway7::with_defaults(), 7, 2, "segway7");
+    both_builds_agree!(baked::Segway7, 7, 2, "baked segway7");
+    both_builds_agree!(Lorenz::with_defaults(), 3, 0, "lorenz");
+    both_builds_agree!(baked::Lorenz, 3, 0, "baked lorenz");
+    both_builds_agree!(HenonHeiles::with_defaults(), 4, 0, "henon_heiles");
+    both_builds_agree!(baked::HenonHeiles, 4, 0, "baked henon_heiles");
+    isa_detection_matches_std_and_can_be_forced();
+}
+
+/// The hand-written CPUID/XGETBV check (the model crate is `no_std`) says what std's says, and
+/// `force_baseline` switches the choice both ways. Called at the end of the test above rather
+/// than as a test of its own: a parallel test forcing the baseline would let the comparison
+/// above run the baseline build twice.
+fn isa_detection_matches_std_and_can_be_forced() {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let std_says = is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl");
+        assert_eq!(twv_model::isa::avx512(), std_says);
+        twv_model::isa::force_baseline(true);
+        assert!(!twv_model::isa::avx512());
+        twv_model::isa::force_baseline(false);
+        assert_eq!(twv_model::isa::avx512(), std_says);
+    }
+}
