@@ -103,9 +103,14 @@ fn main() -> ExitCode {
     };
     println!(
         "vehicle8, {} samples of >= {} ms per function, paired (twv, C) samples; \
-         ns per call: median ±half the interquartile range",
+         ns per call: median ±half the interquartile range; twv kernels: {} build",
         plan.samples,
-        plan.sample_time.as_millis()
+        plan.sample_time.as_millis(),
+        if twv_model::isa::avx512() {
+            "AVX-512"
+        } else {
+            "x86-64 baseline"
+        }
     );
     println!();
     println!("| function | params | twv ns | CasADi C ns | ratio (twv/C) |");
@@ -122,6 +127,28 @@ fn main() -> ExitCode {
             );
         }
     }
+    // The same kernels with their AVX-512 build switched off: what a CPU without AVX-512 gets
+    // (and how much of the ratio is the run-time choice of instruction set).
+    if twv_model::isa::avx512() {
+        twv_model::isa::force_baseline(true);
+        println!();
+        println!("the same, runtime parameters, AVX-512 build switched off (x86-64 baseline):");
+        println!();
+        println!("| function | twv ns | CasADi C ns | ratio (twv/C) |");
+        println!("|---|---:|---:|---:|");
+        for function in ["f", "f+jac_x", "f_jw (K=8)"] {
+            let pair = measure(plan, function, &runtime, &c_runtime, &pt);
+            println!(
+                "| {function} | {} | {} | {:.2} |",
+                pair.twv, pair.c, pair.ratio.median
+            );
+        }
+        twv_model::isa::force_baseline(false);
+    } else {
+        println!();
+        println!("(this CPU has no AVX-512F/VL: the table above is the x86-64 baseline build)");
+    }
+
     // What each side pays per angle: CasADi's C calls the C library's sin and cos (gcc merges
     // them into one sincos call); the Rust kernels inline twv_model::trig::sin_cos.
     let libm = time(plan, || {
