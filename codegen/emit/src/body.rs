@@ -159,16 +159,20 @@ pub fn matrix_expr(o: &Output) -> TokenStream {
 /// increasing order), from the stored entries `j`, in the column form of `twv_model::columns`
 /// (the interpreter computes the same operations).
 pub fn jw_columns(jac: &Output) -> TokenStream {
-    let mut columns: Vec<(usize, Vec<TokenStream>)> = Vec::new();
-    for (e, (r, c, _)) in jac.entries().enumerate() {
-        if columns.last().is_none_or(|(last, _)| *last != c) {
-            columns.push((c, vec![quote!(zero); jac.rows]));
-        }
-        if let Some((_, column)) = columns.last_mut() {
-            let e = index(e);
-            column[r] = quote!(::twv_model::columns::opaque(j[#e]));
-        }
-    }
+    let columns: Vec<(usize, Vec<TokenStream>)> = jac
+        .stored_columns()
+        .into_iter()
+        .map(|(c, entries)| {
+            let column = entries.into_iter().map(|e| match e {
+                Some(e) => {
+                    let e = index(e);
+                    quote!(::twv_model::columns::opaque(j[#e]))
+                }
+                None => quote!(zero),
+            });
+            (c, column.collect())
+        })
+        .collect();
     let rows = index(jac.rows);
     let Some(((first, _), rest)) = columns.split_first() else {
         return quote! {

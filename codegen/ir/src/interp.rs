@@ -76,17 +76,16 @@ impl Program {
             inputs: leak_names(ir.inputs().iter().map(|s| &s.name)),
             params: leak_names(ir.params().iter().map(|p| &p.name)),
         };
-        let mut jw_columns: Vec<(usize, Vec<Option<usize>>)> = Vec::new();
-        if let Some(jac) = ir.output("f_jac_x", "jac_x") {
-            for (r, c, v) in jac.entries() {
-                if jw_columns.last().is_none_or(|(last, _)| *last != c) {
-                    jw_columns.push((c, vec![None; ir.nx()]));
-                }
-                if let Some((_, column)) = jw_columns.last_mut() {
-                    column[r] = Some(v);
+        // Value ids in `f_jac_x` instead of the stored entries' CCS indices.
+        let jw_columns = ir.output("f_jac_x", "jac_x").map_or_else(Vec::new, |jac| {
+            let mut columns = jac.stored_columns();
+            for (_, rows) in &mut columns {
+                for e in rows.iter_mut().flatten() {
+                    *e = jac.values[*e];
                 }
             }
-        }
+            columns
+        });
         let work_len = ir
             .functions()
             .values()

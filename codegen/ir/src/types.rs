@@ -155,6 +155,24 @@ impl Output {
             .flat_map(move |(col, w)| (w[0]..w[1]).map(move |e| (self.row[e], col, self.values[e])))
     }
 
+    /// The columns that have stored entries, increasing, each with the CCS index of its stored
+    /// entry in every row (`None`: structural zero): the layout of the column-form J·W that the
+    /// generated code and the interpreter share (`twv_model::columns`).
+    pub fn stored_columns(&self) -> Vec<(usize, Vec<Option<usize>>)> {
+        self.colind
+            .windows(2)
+            .enumerate()
+            .filter(|(_, w)| w[0] < w[1])
+            .map(|(col, w)| {
+                let mut rows = vec![None; self.rows];
+                for e in w[0]..w[1] {
+                    rows[self.row[e]] = Some(e);
+                }
+                (col, rows)
+            })
+            .collect()
+    }
+
     /// Whether two outputs store the same entries (same shape and pattern).
     pub fn same_sparsity(&self, other: &Output) -> bool {
         self.rows == other.rows
