@@ -2,6 +2,9 @@
 //! values, vs finite differences; sparse vs dense Jacobians; J·W; baked vs runtime parameters;
 //! and the clear errors of the IR validator, the parameter files and the macro.
 
+mod common;
+
+use common::assert_bits;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use twv_generated::{baked, HenonHeiles, Lorenz, Segway7, Vehicle7, Vehicle8};
@@ -29,14 +32,6 @@ fn random_point<const NX: usize, const NU: usize>(rng: &mut ChaCha8Rng) -> ([f64
 
 fn random_w<const NX: usize, const K: usize>(rng: &mut ChaCha8Rng) -> [[f64; NX]; K] {
     std::array::from_fn(|_| std::array::from_fn(|_| rng.gen_range(-1.0..1.0)))
-}
-
-#[track_caller]
-fn assert_bits(a: &[f64], b: &[f64], what: &str) {
-    assert_eq!(a.len(), b.len(), "{what}: lengths");
-    for (i, (x, y)) in a.iter().zip(b).enumerate() {
-        assert_eq!(x.to_bits(), y.to_bits(), "{what}[{i}]: {x:e} vs {y:e}");
-    }
 }
 
 #[track_caller]

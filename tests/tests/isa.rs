@@ -4,17 +4,12 @@
 //! shipped model, runtime and baked, at random points (angles beyond the inline sin/cos range
 //! included, so its C-library branch runs in both builds).
 
+mod common;
+
+use common::assert_bits;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use twv_generated::{baked, HenonHeiles, Lorenz, Segway7, Vehicle7, Vehicle8};
-
-#[track_caller]
-fn assert_bits(a: &[f64], b: &[f64], what: &str) {
-    assert_eq!(a.len(), b.len(), "{what}: lengths");
-    for (i, (x, y)) in a.iter().zip(b).enumerate() {
-        assert_eq!(x.to_bits(), y.to_bits(), "{what}[{i}]: {x:e} vs {y:e}");
-    }
-}
 
 fn random_point<const NX: usize, const NU: usize>(rng: &mut ChaCha8Rng) -> ([f64; NX], [f64; NU]) {
     // Mostly moderate states; every eighth point far out (|x| up to 1e7 reaches the C library

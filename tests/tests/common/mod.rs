@@ -1,0 +1,11 @@
+//! Helpers shared by the cross-crate test files (each file is its own crate and includes this
+//! module with `mod common;`).
+
+/// `a` and `b` agree bit for bit, entry by entry (NaN payloads and signs of zero included).
+#[track_caller]
+pub fn assert_bits(a: &[f64], b: &[f64], what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}: lengths");
+    for (i, (x, y)) in a.iter().zip(b).enumerate() {
+        assert_eq!(x.to_bits(), y.to_bits(), "{what}[{i}]: {x:e} vs {y:e}");
+    }
+}
