@@ -108,6 +108,38 @@ fn same_model<const NX: usize, const NU: usize>(
             &format!("{what} f_jw_jac_u jac_u"),
         );
     }
+    // Eight points at once (generated: one instruction stream; interpreter: the trait's
+    // default, one point after another).
+    use twv_model::lanes::LANES;
+    let mut x = [[0.0; NX]; LANES];
+    let mut u = [[0.0; NU]; LANES];
+    for l in 0..LANES {
+        (x[l], u[l]) = random_point::<NX, NU>(&mut rng);
+    }
+    let w = random_w::<NX, LANES>(&mut rng);
+    let (mut fa, mut oa, mut ja) = (
+        [[0.0; NX]; LANES],
+        [[0.0; NX]; LANES],
+        [[[0.0; NU]; NX]; LANES],
+    );
+    let (mut fb, mut ob, mut jb) = (fa, oa, ja);
+    a.f_jw_jac_u_lanes(&x, &u, &w, &mut fa, &mut oa, &mut ja);
+    b.f_jw_jac_u_lanes(&x, &u, &w, &mut fb, &mut ob, &mut jb);
+    assert_bits(
+        fa.as_flattened(),
+        fb.as_flattened(),
+        &format!("{what} lanes f"),
+    );
+    assert_bits(
+        oa.as_flattened(),
+        ob.as_flattened(),
+        &format!("{what} lanes J·w"),
+    );
+    assert_bits(
+        ja.as_flattened().as_flattened(),
+        jb.as_flattened().as_flattened(),
+        &format!("{what} lanes jac_u"),
+    );
 }
 
 /// Every `Mechanical` method of `a` and `b` agrees bit for bit at random points.

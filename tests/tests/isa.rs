@@ -71,6 +71,48 @@ macro_rules! both_builds_agree {
                 assert_bits(&[ta], &[tb], &format!("{tag} trace"));
             }
         }
+        lanes_agree_with_one_point!(m, $nx, $nu, what);
+    }};
+}
+
+/// Every lane of the lanes kernel (both builds) against the one-point kernel at that lane's
+/// point, K = 1 with ∂f/∂u, at 100 random batches of 8 points.
+macro_rules! lanes_agree_with_one_point {
+    ($m:expr, $nx:literal, $nu:literal, $what:expr) => {{
+        use twv_model::lanes::LANES;
+        let (m, what) = (&$m, $what);
+        let mut rng = ChaCha8Rng::seed_from_u64(13);
+        for _ in 0..100 {
+            let mut x = [[0.0; $nx]; LANES];
+            let mut u = [[0.0; $nu]; LANES];
+            for l in 0..LANES {
+                (x[l], u[l]) = random_point::<$nx, $nu>(&mut rng);
+            }
+            let w: [[f64; $nx]; LANES] =
+                std::array::from_fn(|_| std::array::from_fn(|_| rng.gen_range(-1.0..1.0)));
+            let mut f = [[[0.0; $nx]; LANES]; 2];
+            let mut out = [[[0.0; $nx]; LANES]; 2];
+            let mut ju = [[[[0.0; $nu]; $nx]; LANES]; 2];
+            {
+                let ([f0, f1], [o0, o1], [j0, j1]) = (&mut f, &mut out, &mut ju);
+                m.kernel_variational_lanes(&x, &u, &w, f0, o0, j0);
+                m.kernel_variational_lanes_baseline(&x, &u, &w, f1, o1, j1);
+            }
+            for l in 0..LANES {
+                let (mut f1, mut o1, mut j1) = ([0.0; $nx], [[0.0; $nx]; 1], [[0.0; $nu]; $nx]);
+                m.kernel_variational(&x[l], &u[l], &w[l..=l], &mut f1, &mut o1, Some(&mut j1));
+                for build in 0..2 {
+                    let tag = format!("{what} lanes (build {build}) lane {l}");
+                    assert_bits(&f[build][l], &f1, &format!("{tag} f"));
+                    assert_bits(&out[build][l], &o1[0], &format!("{tag} J·w"));
+                    assert_bits(
+                        ju[build][l].as_flattened(),
+                        j1.as_flattened(),
+                        &format!("{tag} jac_u"),
+                    );
+                }
+            }
+        }
     }};
 }
 

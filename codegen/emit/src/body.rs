@@ -50,6 +50,66 @@ pub fn lets(f: &Function, params: &Params) -> TokenStream {
     quote!(#(#lets)*)
 }
 
+/// The `let`s of `f` over lane arrays (`twv_model::lanes`): each instruction's scalar expression
+/// written out for every lane, states and inputs read from the gathered lane arrays `xs`, `us`.
+/// Per lane these are the operations of [`lets`], in the same order.
+pub fn lane_lets(f: &Function, params: &Params) -> TokenStream {
+    let (a, b) = (format_ident!("a"), format_ident!("b"));
+    // sin and cos of one angle come from one `lanes::sin_cos` call (`scK` for value K).
+    let mut sin_cos_done = std::collections::BTreeSet::new();
+    let lets = f.instructions().iter().enumerate().map(|(k, instr)| {
+        let v = value(k);
+        if let Instr::Unary(op @ (UnaryOp::Sin | UnaryOp::Cos), x) = *instr {
+            let sc = format_ident!("sc{}", x);
+            let pair = if sin_cos_done.insert(x) {
+                let x = value(x);
+                quote!(let #sc = ::twv_model::lanes::sin_cos(#x);)
+            } else {
+                TokenStream::new()
+            };
+            let part = if op == UnaryOp::Sin {
+                quote!(0)
+            } else {
+                quote!(1)
+            };
+            return quote!(#pair let #v: ::twv_model::lanes::Lanes = #sc.#part;);
+        }
+        let rhs = match *instr {
+            Instr::Input { arg, index: i } => {
+                let idx = index(i);
+                match arg {
+                    Arg::X => quote!(xs[#idx]),
+                    Arg::U => quote!(us[#idx]),
+                    Arg::P => {
+                        let p = input(arg, i, params);
+                        quote!(::twv_model::lanes::splat(#p))
+                    }
+                }
+            }
+            Instr::Const(c) => {
+                let c = float(c);
+                quote!(::twv_model::lanes::splat(#c))
+            }
+            Instr::Unary(op, x) => {
+                let (e, x) = (unary(op, &a), value(x));
+                quote!(::twv_model::lanewise!(|#a| #e; #x))
+            }
+            Instr::Binary(op, x, y) => {
+                let (e, x, y) = (binary(op, &a, &b), value(x), value(y));
+                match op {
+                    BinaryOp::Add => quote!(::twv_model::lanes::wide::add(#x, #y)),
+                    BinaryOp::Sub => quote!(::twv_model::lanes::wide::sub(#x, #y)),
+                    BinaryOp::Mul => quote!(::twv_model::lanes::wide::mul(#x, #y)),
+                    BinaryOp::Div => quote!(::twv_model::lanes::wide::div(#x, #y)),
+                    _ => quote!(::twv_model::lanewise!(|#a, #b| #e; #x, #y)),
+                }
+            }
+        };
+        quote!(let #v: ::twv_model::lanes::Lanes = #rhs;)
+    });
+    quote!(#(#lets)*)
+}
+
 fn input(arg: Arg, i: usize, params: &Params) -> TokenStream {
     let idx = index(i);
     match (arg, params) {
@@ -143,6 +203,28 @@ pub fn dense(o: &Output) -> Vec<Vec<TokenStream>> {
     grid
 }
 
+/// The dense matrix of an output over lane arrays (`vK` or zeros at every lane).
+fn lane_dense(o: &Output) -> Vec<Vec<TokenStream>> {
+    let mut grid = vec![vec![quote!(::twv_model::lanes::splat(0.0)); o.cols]; o.rows];
+    for (r, c, v) in o.entries() {
+        let v = value(v);
+        grid[r][c] = quote!(#v);
+    }
+    grid
+}
+
+/// `[e0, e1, ...]` of a column-vector output over lane arrays.
+pub fn lane_vector_expr(o: &Output) -> TokenStream {
+    let items = lane_dense(o).into_iter().map(|row| quote!(#(#row),*));
+    quote!([#(#items),*])
+}
+
+/// `[[...], ...]` (row-major) of a matrix output over lane arrays.
+pub fn lane_matrix_expr(o: &Output) -> TokenStream {
+    let rows = lane_dense(o).into_iter().map(|row| quote!([#(#row),*]));
+    quote!([#(#rows),*])
+}
+
 /// `[e0, e1, ...]` of a column-vector output.
 pub fn vector_expr(o: &Output) -> TokenStream {
     let items = dense(o).into_iter().map(|row| quote!(#(#row),*));
@@ -152,6 +234,36 @@ pub fn vector_expr(o: &Output) -> TokenStream {
 /// `[[...], ...]` (row-major) of a matrix output.
 pub fn matrix_expr(o: &Output) -> TokenStream {
     let rows = dense(o).into_iter().map(|row| quote!([#(#row),*]));
+    quote!([#(#rows),*])
+}
+
+/// The column-form J·w of [`jw_columns`] for one tangent vector per lane: `out[r]` (lane
+/// arrays) from the stored entries' values `jac.values` (lane arrays `vK`) and the gathered
+/// tangent `wl`, with per lane the one-point kernel's operations: the first column's product,
+/// then each further column's product added, structural zeros as 0.0.
+pub fn lane_jw_rows(jac: &Output) -> TokenStream {
+    let columns = jac.stored_columns();
+    let rows = (0..jac.rows).map(|r| {
+        let terms = columns.iter().map(|(c, entries)| {
+            let entry = match entries[r] {
+                Some(e) => {
+                    let v = value(jac.values[e]);
+                    quote!(#v)
+                }
+                None => quote!(::twv_model::lanes::splat(0.0)),
+            };
+            let c = index(*c);
+            quote!(::twv_model::lanes::wide::mul(#entry, wl[#c]))
+        });
+        let mut terms = terms.collect::<Vec<_>>().into_iter();
+        match terms.next() {
+            None => quote!(::twv_model::lanes::splat(0.0)),
+            Some(first) => terms.fold(
+                first,
+                |acc, t| quote!(::twv_model::lanes::wide::add(#acc, #t)),
+            ),
+        }
+    });
     quote!([#(#rows),*])
 }
 

@@ -4,7 +4,10 @@ use proc_macro2::{Ident, TokenStream};
 use quote::{format_ident, quote};
 use twv_ir::{Arg, Function, Ir, Kind, Output};
 
-use crate::body::{float, index, jw_columns, lets, matrix_expr, vector_expr};
+use crate::body::{
+    float, index, jw_columns, lane_jw_rows, lane_lets, lane_matrix_expr, lane_vector_expr, lets,
+    matrix_expr, vector_expr,
+};
 use crate::{EmitError, Params};
 
 /// (function, values, operations) of every function of the IR, in name order.
@@ -343,6 +346,7 @@ fn kernels(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
             #trace
         },
     );
+    let lanes = variational_lanes(p)?;
     let allow = allow();
     Ok(quote! {
         #allow
@@ -352,6 +356,82 @@ fn kernels(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
             #jac_u
             #f_jac_x
             #variational
+            #lanes
+        }
+    })
+}
+
+/// The variational kernel with one tangent vector at `LANES` points in one instruction stream
+/// (`twv_model::lanes`): IR functions `f_jac_x` and `jac_u` and the column-form J·w over lane
+/// arrays, per lane the operations of the one-point kernel, so every lane has its bits.
+fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
+    let (nx, nu) = (&p.nx, &p.nu);
+    let fj_body = lane_lets(p.function("f_jac_x")?, p.params);
+    let fj_f = lane_vector_expr(p.output("f_jac_x", "f")?);
+    let jw = lane_jw_rows(p.output("f_jac_x", "jac_x")?);
+    let ju_body = lane_lets(p.function("jac_u")?, p.params);
+    let ju_out = lane_matrix_expr(p.output("jac_u", "jac_u")?);
+    let params = quote!(
+        x_lanes: &[[f64; #nx]; ::twv_model::lanes::LANES],
+        u_lanes: &[[f64; #nu]; ::twv_model::lanes::LANES],
+        w_lanes: &[[f64; #nx]; ::twv_model::lanes::LANES],
+        f_lanes: &mut [[f64; #nx]; ::twv_model::lanes::LANES],
+        out_lanes: &mut [[f64; #nx]; ::twv_model::lanes::LANES],
+        jac_u_lanes: &mut [[[f64; #nu]; #nx]; ::twv_model::lanes::LANES]
+    );
+    let args = quote!(x_lanes, u_lanes, w_lanes, f_lanes, out_lanes, jac_u_lanes);
+    // Unlike the one-point kernels this body is not built twice: its + − × ÷ are AVX-512
+    // intrinsics (the vectoriser leaves the per-lane form scalar), so without AVX-512 the lanes
+    // go one by one through the one-point kernel, which has the same bits.
+    Ok(quote! {
+        /// [`Self::kernel_variational`] with one tangent vector and ∂f/∂u at `LANES` points
+        /// (`x_lanes[l]`, … → `f_lanes[l]`, …): one AVX-512 instruction stream for all lanes
+        /// where the CPU has it, else one point after the other. Every lane has the bits of the
+        /// one-point kernel.
+        pub fn kernel_variational_lanes(&self, #params) {
+            #[cfg(target_arch = "x86_64")]
+            if ::twv_model::isa::avx512() {
+                // SAFETY: `avx512()` is true only when the CPU and the OS support AVX-512F and
+                // AVX-512VL, the features this build was compiled for.
+                return unsafe { self.kernel_variational_lanes_avx512(#args) };
+            }
+            self.kernel_variational_lanes_baseline(#args)
+        }
+        /// [`Self::kernel_variational_lanes`] one lane after the other through the one-point
+        /// kernel: what runs where AVX-512 is missing (public so tests can compare).
+        pub fn kernel_variational_lanes_baseline(&self, #params) {
+            for l in 0..::twv_model::lanes::LANES {
+                self.kernel_variational(
+                    &x_lanes[l],
+                    &u_lanes[l],
+                    ::core::array::from_ref(&w_lanes[l]),
+                    &mut f_lanes[l],
+                    ::core::array::from_mut(&mut out_lanes[l]),
+                    ::core::option::Option::Some(&mut jac_u_lanes[l]),
+                );
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f,avx512vl")]
+        unsafe fn kernel_variational_lanes_avx512(&self, #params) {
+            let xs = ::twv_model::lanes::gather(x_lanes);
+            let us = ::twv_model::lanes::gather(u_lanes);
+            #fj_body
+            ::twv_model::lanes::scatter(&#fj_f, f_lanes);
+            let wl = ::twv_model::lanes::gather(w_lanes);
+            ::twv_model::lanes::scatter(&#jw, out_lanes);
+            {
+                #ju_body
+                let ju: [[::twv_model::lanes::Lanes; #nu]; #nx] = #ju_out;
+                for (l, jl) in jac_u_lanes.iter_mut().enumerate() {
+                    let jl = ::core::hint::black_box(jl);
+                    for (row, lanes_row) in jl.iter_mut().zip(&ju) {
+                        for (v, lanes) in row.iter_mut().zip(lanes_row) {
+                            *v = lanes[l];
+                        }
+                    }
+                }
+            }
         }
     })
 }
@@ -470,6 +550,19 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                 jac_u: &mut [[f64; #nu]; #nx],
             ) {
                 self.kernel_variational(x, u, w, f, out, ::core::option::Option::Some(jac_u));
+            }
+
+            #[inline]
+            fn f_jw_jac_u_lanes(
+                &self,
+                x: &[[f64; #nx]; ::twv_model::lanes::LANES],
+                u: &[[f64; #nu]; ::twv_model::lanes::LANES],
+                w: &[[f64; #nx]; ::twv_model::lanes::LANES],
+                f: &mut [[f64; #nx]; ::twv_model::lanes::LANES],
+                out: &mut [[f64; #nx]; ::twv_model::lanes::LANES],
+                jac_u: &mut [[[f64; #nu]; #nx]; ::twv_model::lanes::LANES],
+            ) {
+                self.kernel_variational_lanes(x, u, w, f, out, jac_u);
             }
 
             #[inline]

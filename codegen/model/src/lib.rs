@@ -15,6 +15,7 @@
 
 pub mod columns;
 pub mod isa;
+pub mod lanes;
 pub mod trig;
 
 /// Names and descriptive metadata of a model.
@@ -120,6 +121,31 @@ pub trait Model<const NX: usize, const NU: usize> {
     ) {
         self.f_jw(x, u, w, f, out);
         self.jac_u(x, u, jac_u);
+    }
+
+    /// [`f_jw_jac_u`](Self::f_jw_jac_u) with one tangent vector at [`lanes::LANES`]
+    /// independent points (`x[l]`, `u[l]`, `w[l]` → `f[l]`, `out[l]`, `jac_u[l]`), for maps over
+    /// many points. Every lane gets exactly the bits of the one-point call; the default makes
+    /// those calls, generated code evaluates all lanes in one instruction stream.
+    fn f_jw_jac_u_lanes(
+        &self,
+        x: &[[f64; NX]; lanes::LANES],
+        u: &[[f64; NU]; lanes::LANES],
+        w: &[[f64; NX]; lanes::LANES],
+        f: &mut [[f64; NX]; lanes::LANES],
+        out: &mut [[f64; NX]; lanes::LANES],
+        jac_u: &mut [[[f64; NU]; NX]; lanes::LANES],
+    ) {
+        for l in 0..lanes::LANES {
+            self.f_jw_jac_u::<1>(
+                &x[l],
+                &u[l],
+                core::array::from_ref(&w[l]),
+                &mut f[l],
+                core::array::from_mut(&mut out[l]),
+                &mut jac_u[l],
+            );
+        }
     }
 
     /// `out[k] = (∂f/∂x) w[k]` without ẋ.

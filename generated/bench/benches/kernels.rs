@@ -164,6 +164,41 @@ fn main() -> ExitCode {
         "reference, sin and cos of one angle: C library {libm} ns, twv_model::trig {inline} ns"
     );
 
+    // What a map over many grid points pays per point for its closed-loop stage (one tangent
+    // vector and ∂f/∂u): one point per call, or eight lanes per call.
+    let one = time(plan, || {
+        let (mut f, mut out, mut ju) = ([0.0; NX], [[0.0; NX]; 1], [[0.0; 2]; NX]);
+        black_box(&runtime).f_jw_jac_u::<1>(
+            black_box(&pt.x),
+            black_box(&pt.u),
+            black_box(&[pt.w[0]]),
+            &mut f,
+            &mut out,
+            &mut ju,
+        );
+        black_box((&mut f, &mut out, &mut ju));
+    });
+    let lanes = time(plan, || {
+        let lanes = twv_model::lanes::LANES;
+        let (x, u, w) = ([pt.x; 8], [pt.u; 8], [pt.w[0]; 8]);
+        let (mut f, mut out, mut ju) = ([[0.0; NX]; 8], [[0.0; NX]; 8], [[[0.0; 2]; NX]; 8]);
+        black_box(&runtime).f_jw_jac_u_lanes(
+            black_box(&x),
+            black_box(&u),
+            black_box(&w),
+            &mut f,
+            &mut out,
+            &mut ju,
+        );
+        black_box((&mut f, &mut out, &mut ju, lanes));
+    });
+    println!();
+    println!(
+        "closed-loop stage kernel (f, J·w for one w, ∂f/∂u): one point per call {one} ns, \
+         eight lanes per call {lanes} ns ({:.1} ns per point)",
+        lanes.median / 8.0
+    );
+
     // The Lyapunov floor: an RK4 stage cannot start before the previous stage's f is known, so
     // the study preset (10 s at h = 1e-3: 40 000 stages) costs at least 40 000 times the
     // latency of one dependent f call even without tangent vectors, and in practice that of
