@@ -15,6 +15,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
+use twv_model::lanes::LANES;
 use twv_model::Model;
 
 use super::control_args::{dispatch_control, plant, ControlTask, ControllerArgs};
@@ -23,8 +24,8 @@ use super::model::{dispatch, parse_vector, to_array, LoadedModel, ModelArgs, Mod
 use crate::control::PidLoop;
 use crate::linear::{linearize, OperatingPoint, PidGains, PitchLoop};
 use crate::sweep::{
-    merge, metric, Axis, Grid, Metric, MetricSettings, PointResult, Shard, ShardFile, Status,
-    SweepConfig,
+    max_lyapunov_lanes, merge, metric, Axis, Grid, Metric, MetricSettings, PointResult, Shard,
+    ShardFile, Status, SweepConfig,
 };
 
 /// Map a metric over a grid of PID gains (one shard of it).
@@ -188,7 +189,32 @@ impl ControlTask for Chunk<'_> {
         let plant = plant(model, loaded)?;
         let s = &self.config.settings;
         let mut out = Vec::with_capacity(self.indices.len());
-        for index in self.indices {
+        let mut rest = self.indices;
+        if self.config.metric == Metric::MaxLyapunov {
+            // Eight points at a time through the lanes kernel (same bits as one by one).
+            while rest.len() >= LANES {
+                let group: [usize; LANES] = std::array::from_fn(|l| rest.start + l);
+                let controllers = group
+                    .iter()
+                    .map(|&i| {
+                        self.args
+                            .controller
+                            .settings(self.config.grid.gains(i), None, None)
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                let loops = controllers
+                    .iter()
+                    .map(|c| PidLoop::<_, NX, NU, NA>::new(model, c, plant))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let Ok(loops) = <[_; LANES]>::try_from(loops) else {
+                    unreachable!("one loop per point of the group")
+                };
+                out.extend(max_lyapunov_lanes(&loops, &x0, s, group));
+                self.progress.inc(LANES as u64);
+                rest.start += LANES;
+            }
+        }
+        for index in rest {
             let gains = self.config.grid.gains(index);
             let controller = self.args.controller.settings(gains, None, None)?;
             let field = PidLoop::<_, NX, NU, NA>::new(model, &controller, plant)?;

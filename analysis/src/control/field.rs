@@ -2,12 +2,13 @@
 //! controller's), with its exact Jacobian, so the same value runs in the integrators, the
 //! simulations and `lyapunov_spectrum` (see [`crate::integrate::field`] for the recipe).
 
+use twv_model::lanes::LANES;
 use twv_model::Model;
 
 use super::error::ControlError;
 use super::plant::Plant;
 use super::settings::{AntiWindup, ControllerSettings};
-use crate::integrate::VectorField;
+use crate::integrate::{VarState, VectorField};
 
 /// Where each controller state sits in the augmented state (absolute indices ≥ NX), in the
 /// order ∫e, rate filter, ∫(v_ref − v_x); absent states take no slot, so a PD law has NZ = 0
@@ -350,6 +351,64 @@ where
         let ydir = self.plant.inputs.yaw.unwrap_or([0.0; NU]);
         core::array::from_fn(|j| fdir[j] * df + ydir[j] * dt)
     }
+
+    /// F and J·w of the closed loop from the law and the model's f, (∂f/∂x)·w and ∂f/∂u at
+    /// the same point (`jwx` empty when K = 0).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn assemble<const K: usize>(
+        &self,
+        law: &Law<NA, NU>,
+        w: &[[f64; NA]; K],
+        fx: &[f64; NX],
+        jwx: &[[f64; NX]],
+        b: &[[f64; NU]; NX],
+        f: &mut [f64; NA],
+        jw: &mut [[f64; NA]; K],
+    ) {
+        for ((out, wk), jx) in jw.iter_mut().zip(w).zip(jwx) {
+            let du = self.du(law, wk);
+            for i in 0..NX {
+                out[i] = jx[i] + dot(&b[i], &du);
+            }
+            for (iz, slot) in self.slots() {
+                if let Some(iz) = iz {
+                    out[iz] = dot(&law.d_zdot[slot], wk);
+                }
+            }
+        }
+        f[..NX].copy_from_slice(fx);
+        for (iz, slot) in self.slots() {
+            if let Some(iz) = iz {
+                f[iz] = law.zdot[slot];
+            }
+        }
+    }
+
+    /// [`VectorField::eval`] with one tangent vector for [`LANES`] loops of the same model at
+    /// once (loop `l` at `y[l]` → `dy[l]`, no trace): the laws one by one, the model through its
+    /// lanes kernel ([`Model::f_jw_jac_u_lanes`]). Every lane has the bits of `eval` alone.
+    pub fn eval_lanes(
+        loops: &[Self; LANES],
+        t: f64,
+        y: &[VarState<NA, 1>; LANES],
+        dy: &mut [VarState<NA, 1>; LANES],
+    ) {
+        let model = loops[0].model;
+        debug_assert!(loops.iter().all(|l| core::ptr::eq(l.model, model)));
+        let laws: [Law<NA, NU>; LANES] = core::array::from_fn(|l| loops[l].law::<true>(t, &y[l].x));
+        let x = core::array::from_fn(|l| core::array::from_fn(|i| y[l].x[i]));
+        let u = core::array::from_fn(|l| laws[l].cmd.u);
+        let w = core::array::from_fn(|l| core::array::from_fn(|i| y[l].w[0][i]));
+        let (mut fx, mut jwx) = ([[0.0; NX]; LANES], [[0.0; NX]; LANES]);
+        let mut b = [[[0.0; NU]; NX]; LANES];
+        model.f_jw_jac_u_lanes(&x, &u, &w, &mut fx, &mut jwx, &mut b);
+        for (l, d) in dy.iter_mut().enumerate() {
+            let jwl = core::slice::from_ref(&jwx[l]);
+            loops[l].assemble::<1>(&laws[l], &y[l].w, &fx[l], jwl, &b[l], &mut d.x, &mut d.w);
+            d.trace_integral = 0.0;
+        }
+    }
 }
 
 impl<M, const NX: usize, const NU: usize, const NA: usize> VectorField<NA>
@@ -368,10 +427,10 @@ where
     ) {
         let x: [f64; NX] = core::array::from_fn(|i| xa[i]);
         let mut fx = [0.0; NX];
-        let law = if K == 0 {
+        if K == 0 {
             let law = self.law::<false>(t, xa);
             self.model.f(&x, &law.cmd.u, &mut fx);
-            law
+            self.assemble::<K>(&law, w, &fx, &[], &[[0.0; NU]; NX], f, jw);
         } else {
             let law = self.law::<true>(t, xa);
             let wx: [[f64; NX]; K] = core::array::from_fn(|k| core::array::from_fn(|i| w[k][i]));
@@ -379,24 +438,7 @@ where
             let mut b = [[0.0; NU]; NX];
             self.model
                 .f_jw_jac_u(&x, &law.cmd.u, &wx, &mut fx, &mut jwx, &mut b);
-            for ((out, wk), jx) in jw.iter_mut().zip(w).zip(&jwx) {
-                let du = self.du(&law, wk);
-                for i in 0..NX {
-                    out[i] = jx[i] + dot(&b[i], &du);
-                }
-                for (iz, slot) in self.slots() {
-                    if let Some(iz) = iz {
-                        out[iz] = dot(&law.d_zdot[slot], wk);
-                    }
-                }
-            }
-            law
-        };
-        f[..NX].copy_from_slice(&fx);
-        for (iz, slot) in self.slots() {
-            if let Some(iz) = iz {
-                f[iz] = law.zdot[slot];
-            }
+            self.assemble::<K>(&law, w, &fx, &jwx, &b, f, jw);
         }
     }
 

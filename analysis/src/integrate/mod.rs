@@ -37,5 +37,6 @@ pub use field::VectorField;
 pub use linear_feedback::LinearStateFeedback;
 pub use open_loop::OpenLoop;
 pub use rk4::Rk4;
+pub(crate) use rk4::{equal_steps, rk4_step_each, Rk4Scratch};
 pub use state::VarState;
 pub use stepper::{Stepper, StopReason};

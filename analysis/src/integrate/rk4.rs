@@ -23,9 +23,7 @@ pub struct Rk4<F, const N: usize, const K: usize> {
     trace: bool,
     steps: u64,
     y: VarState<N, K>,
-    k: VarState<N, K>,
-    acc: VarState<N, K>,
-    tmp: VarState<N, K>,
+    scratch: Rk4Scratch<N, K, 1>,
 }
 
 impl<F: VectorField<N>, const N: usize, const K: usize> Rk4<F, N, K> {
@@ -53,9 +51,7 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Rk4<F, N, K> {
             trace,
             steps: 0,
             y,
-            k: VarState::ZERO,
-            acc: VarState::ZERO,
-            tmp: VarState::ZERO,
+            scratch: Rk4Scratch::ZERO,
         })
     }
 
@@ -64,30 +60,84 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Rk4<F, N, K> {
         self.h
     }
 
-    /// One RK4 step of size `h` from the current point, in four fused passes over the state;
-    /// returns whether the new point is finite.
+    /// One RK4 step of size `h` from the current point; returns whether the new point is
+    /// finite.
     #[inline(always)]
     fn rk4_step(&mut self, h: f64) -> bool {
-        let (t, half, sixth) = (self.t, 0.5 * h, h / 6.0);
-        let (y, k, acc, tmp) = (&mut self.y, &mut self.k, &mut self.acc, &mut self.tmp);
-        eval_stage(&self.field, t, y, self.trace, k);
-        acc.zip_pair(tmp, y, k, |a, s, y, k| {
+        let (field, trace) = (&self.field, self.trace);
+        let [finite] = rk4_step_each(
+            self.t,
+            h,
+            core::array::from_mut(&mut self.y),
+            &mut self.scratch,
+            |t, y, k| eval_stage(field, t, &y[0], trace, &mut k[0]),
+        );
+        finite
+    }
+}
+
+/// The stage derivatives, running sum and stage points of one RK4 step of `L` states.
+#[derive(Debug, Clone)]
+pub(crate) struct Rk4Scratch<const N: usize, const K: usize, const L: usize> {
+    k: [VarState<N, K>; L],
+    acc: [VarState<N, K>; L],
+    tmp: [VarState<N, K>; L],
+}
+
+impl<const N: usize, const K: usize, const L: usize> Rk4Scratch<N, K, L> {
+    pub(crate) const ZERO: Self = Self {
+        k: [VarState::ZERO; L],
+        acc: [VarState::ZERO; L],
+        tmp: [VarState::ZERO; L],
+    };
+}
+
+/// One RK4 step of size `h` from `t` for `L` independent states `y`, in four fused passes over
+/// each; `eval(t, states, derivatives)` gives the stage derivatives of all `L` at once (one
+/// state: the field; eight: a lanes kernel). Per state these are the same operations whatever
+/// `L` is, so a state stepped among others keeps the bits it has alone. Returns, per state,
+/// whether its new point is finite.
+#[inline(always)]
+pub(crate) fn rk4_step_each<const N: usize, const K: usize, const L: usize>(
+    t: f64,
+    h: f64,
+    y: &mut [VarState<N, K>; L],
+    scratch: &mut Rk4Scratch<N, K, L>,
+    mut eval: impl FnMut(f64, &[VarState<N, K>; L], &mut [VarState<N, K>; L]),
+) -> [bool; L] {
+    let (half, sixth) = (0.5 * h, h / 6.0);
+    let Rk4Scratch { k, acc, tmp } = scratch;
+    eval(t, y, k);
+    for l in 0..L {
+        acc[l].zip_pair(&mut tmp[l], &y[l], &k[l], |a, s, y, k| {
             *a = k;
             *s = y + half * k;
         });
-        eval_stage(&self.field, t + half, tmp, self.trace, k);
-        acc.zip_pair(tmp, y, k, |a, s, y, k| {
+    }
+    eval(t + half, tmp, k);
+    for l in 0..L {
+        acc[l].zip_pair(&mut tmp[l], &y[l], &k[l], |a, s, y, k| {
             *a += 2.0 * k;
             *s = y + half * k;
         });
-        eval_stage(&self.field, t + half, tmp, self.trace, k);
-        acc.zip_pair(tmp, y, k, |a, s, y, k| {
+    }
+    eval(t + half, tmp, k);
+    for l in 0..L {
+        acc[l].zip_pair(&mut tmp[l], &y[l], &k[l], |a, s, y, k| {
             *a += 2.0 * k;
             *s = y + h * k;
         });
-        eval_stage(&self.field, t + h, tmp, self.trace, k);
-        y.add_sum_checked(sixth, acc, k)
     }
+    eval(t + h, tmp, k);
+    core::array::from_fn(|l| y[l].add_sum_checked(sixth, &acc[l], &k[l]))
+}
+
+/// The equal steps from `t` to `t_stop` of at most about `h`: their number and size.
+pub(crate) fn equal_steps(rest: f64, h: f64) -> (u64, f64) {
+    // The 1e-9 slack keeps an exact multiple of h from turning into one extra tiny step
+    // through rounding.
+    let n = (rest / h * (1.0 - 1e-9)).ceil().max(1.0);
+    (n as u64, rest / n)
 }
 
 impl<F: VectorField<N>, const N: usize, const K: usize> Stepper<N, K> for Rk4<F, N, K> {
@@ -111,13 +161,9 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Stepper<N, K> for Rk4<F,
 
     fn set_stop_time(&mut self, t_stop: f64) -> Result<(), IntegrateError> {
         check_stop(self.t, t_stop)?;
-        let rest = t_stop - self.t;
-        // Equal steps that land on t_stop; the 1e-9 slack keeps an exact multiple of h from
-        // turning into one extra tiny step through rounding.
-        let n = (rest / self.h * (1.0 - 1e-9)).ceil().max(1.0);
+        // Equal steps that land on t_stop.
+        (self.stop_steps, self.stop_h) = equal_steps(t_stop - self.t, self.h);
         self.t_stop = Some(t_stop);
-        self.stop_steps = n as u64;
-        self.stop_h = rest / n;
         Ok(())
     }
 

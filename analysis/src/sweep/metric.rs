@@ -17,7 +17,13 @@ use crate::lyapunov::{
     LyapunovSettings,
 };
 
-fn result(index: usize, g: &PidGains, value: Option<f64>, status: Status) -> PointResult {
+/// The point's record: a non-finite value counts as `Failed`.
+pub(super) fn result(
+    index: usize,
+    g: &PidGains,
+    value: Option<f64>,
+    status: Status,
+) -> PointResult {
     let value = value.filter(|v| v.is_finite());
     let status = if status == Status::Ok && value.is_none() {
         Status::Failed

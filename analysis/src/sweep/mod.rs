@@ -7,7 +7,8 @@
 //! - [`Shard`]: `i/N`, or from a Slurm array / Kubernetes indexed job ([`Shard::from_env`]).
 //! - [`SweepConfig`]: everything a point depends on besides its index, hashed so shards of
 //!   different sweeps are never merged.
-//! - [`metric`]: the three metrics at one point; [`ShardFile`]: the shard format;
+//! - [`metric`]: the three metrics at one point ([`max_lyapunov_lanes`]: λ1 at eight points
+//!   at once, with the bits of the one-point metric); [`ShardFile`]: the shard format;
 //!   [`merge()`]: the merge.
 //!
 //! Running the points (model dispatch, rayon, progress) is the CLI's job (`cli/sweep.rs`).
@@ -17,6 +18,7 @@ mod error;
 mod fall;
 mod file;
 mod grid;
+mod lanes;
 mod merge;
 pub mod metric;
 mod point;
@@ -27,6 +29,7 @@ pub use error::{ranges, SweepError};
 pub use fall::FallStop;
 pub use file::{shard_paths, ShardFile, SHARD_FORMAT};
 pub use grid::{Axis, Grid};
+pub use lanes::max_lyapunov_lanes;
 pub use merge::{collect, merge, Map, MAP_FORMAT};
 pub use point::{PointResult, Status};
 pub use shard::Shard;
