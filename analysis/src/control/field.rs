@@ -81,6 +81,15 @@ struct Law<const NA: usize, const NU: usize> {
     d_zdot: [[f64; NA]; 3],
 }
 
+/// The law's derivative along one tangent vector w.
+#[derive(Clone, Copy)]
+struct Tangent<const NU: usize> {
+    /// (∂u/∂x_aug) w.
+    du: [f64; NU],
+    /// (∂ż/∂x_aug) w per controller slot (0 where absent).
+    dz: [f64; 3],
+}
+
 /// The model closed by the PID pitch loop (and optional velocity and yaw loops):
 ///
 /// ```text
@@ -352,35 +361,50 @@ where
         core::array::from_fn(|j| fdir[j] * df + ydir[j] * dt)
     }
 
-    /// F and J·w of the closed loop from the law and the model's f, (∂f/∂x)·w and ∂f/∂u at
-    /// the same point (`jwx` empty when K = 0).
+    /// What J·w needs of the law for one tangent vector: ∂u/∂x_aug·w and the controller
+    /// rows ∂ż/∂x_aug·w (slot order of [`Layout`]).
+    #[inline(always)]
+    fn tangent(&self, law: &Law<NA, NU>, w: &[f64; NA]) -> Tangent<NU> {
+        let mut dz = [0.0; 3];
+        for (iz, slot) in self.slots() {
+            if iz.is_some() {
+                dz[slot] = dot(&law.d_zdot[slot], w);
+            }
+        }
+        Tangent {
+            du: self.du(law, w),
+            dz,
+        }
+    }
+
+    /// F and J·w of the closed loop from the controller's ż, the law's tangents and the
+    /// model's f, (∂f/∂x)·w and ∂f/∂u at the same point (`jwx` empty when K = 0).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn assemble<const K: usize>(
         &self,
-        law: &Law<NA, NU>,
-        w: &[[f64; NA]; K],
+        zdot: &[f64; 3],
+        tangents: &[Tangent<NU>],
         fx: &[f64; NX],
         jwx: &[[f64; NX]],
         b: &[[f64; NU]; NX],
         f: &mut [f64; NA],
         jw: &mut [[f64; NA]; K],
     ) {
-        for ((out, wk), jx) in jw.iter_mut().zip(w).zip(jwx) {
-            let du = self.du(law, wk);
+        for ((out, tan), jx) in jw.iter_mut().zip(tangents).zip(jwx) {
             for i in 0..NX {
-                out[i] = jx[i] + dot(&b[i], &du);
+                out[i] = jx[i] + dot(&b[i], &tan.du);
             }
             for (iz, slot) in self.slots() {
                 if let Some(iz) = iz {
-                    out[iz] = dot(&law.d_zdot[slot], wk);
+                    out[iz] = tan.dz[slot];
                 }
             }
         }
         f[..NX].copy_from_slice(fx);
         for (iz, slot) in self.slots() {
             if let Some(iz) = iz {
-                f[iz] = law.zdot[slot];
+                f[iz] = zdot[slot];
             }
         }
     }
@@ -396,16 +420,33 @@ where
     ) {
         let model = loops[0].model;
         debug_assert!(loops.iter().all(|l| core::ptr::eq(l.model, model)));
-        let laws: [Law<NA, NU>; LANES] = core::array::from_fn(|l| loops[l].law::<true>(t, &y[l].x));
-        let x = core::array::from_fn(|l| core::array::from_fn(|i| y[l].x[i]));
-        let u = core::array::from_fn(|l| laws[l].cmd.u);
-        let w = core::array::from_fn(|l| core::array::from_fn(|i| y[l].w[0][i]));
+        let mut x = [[0.0; NX]; LANES];
+        let mut u = [[0.0; NU]; LANES];
+        let mut w = [[0.0; NX]; LANES];
+        let mut zdot = [[0.0; 3]; LANES];
+        let mut tangent = [Tangent {
+            du: [0.0; NU],
+            dz: [0.0; 3],
+        }; LANES];
+        for l in 0..LANES {
+            // Reduced at once to what is needed later: copying eight whole laws (their
+            // gradient rows) costs more than the model itself.
+            let law = loops[l].law::<true>(t, &y[l].x);
+            x[l] = core::array::from_fn(|i| y[l].x[i]);
+            w[l] = core::array::from_fn(|i| y[l].w[0][i]);
+            u[l] = law.cmd.u;
+            zdot[l] = law.zdot;
+            tangent[l] = loops[l].tangent(&law, &y[l].w[0]);
+        }
         let (mut fx, mut jwx) = ([[0.0; NX]; LANES], [[0.0; NX]; LANES]);
         let mut b = [[[0.0; NU]; NX]; LANES];
         model.f_jw_jac_u_lanes(&x, &u, &w, &mut fx, &mut jwx, &mut b);
         for (l, d) in dy.iter_mut().enumerate() {
-            let jwl = core::slice::from_ref(&jwx[l]);
-            loops[l].assemble::<1>(&laws[l], &y[l].w, &fx[l], jwl, &b[l], &mut d.x, &mut d.w);
+            let (tan, jwl) = (
+                core::slice::from_ref(&tangent[l]),
+                core::slice::from_ref(&jwx[l]),
+            );
+            loops[l].assemble::<1>(&zdot[l], tan, &fx[l], jwl, &b[l], &mut d.x, &mut d.w);
             d.trace_integral = 0.0;
         }
     }
@@ -430,15 +471,16 @@ where
         if K == 0 {
             let law = self.law::<false>(t, xa);
             self.model.f(&x, &law.cmd.u, &mut fx);
-            self.assemble::<K>(&law, w, &fx, &[], &[[0.0; NU]; NX], f, jw);
+            self.assemble::<K>(&law.zdot, &[], &fx, &[], &[[0.0; NU]; NX], f, jw);
         } else {
             let law = self.law::<true>(t, xa);
+            let tangents: [Tangent<NU>; K] = core::array::from_fn(|k| self.tangent(&law, &w[k]));
             let wx: [[f64; NX]; K] = core::array::from_fn(|k| core::array::from_fn(|i| w[k][i]));
             let mut jwx = [[0.0; NX]; K];
             let mut b = [[0.0; NU]; NX];
             self.model
                 .f_jw_jac_u(&x, &law.cmd.u, &wx, &mut fx, &mut jwx, &mut b);
-            self.assemble::<K>(&law, w, &fx, &jwx, &b, f, jw);
+            self.assemble::<K>(&law.zdot, &tangents, &fx, &jwx, &b, f, jw);
         }
     }
 
