@@ -1,6 +1,7 @@
-//! Zero heap allocations in the hot methods (f, jac_x, jac_x_sparse, f_jw, f_jw_jac_u) of generated and
-//! interpreted models, after construction. Its own test binary because it installs a counting
-//! global allocator; the counter is per thread so the test harness's threads do not interfere.
+//! Zero heap allocations in the hot methods (f, jac_x, jac_x_sparse, f_jw, f_jw_jac_u and its
+//! eight-lane form) of generated and interpreted models, after construction. Its own test
+//! binary because it installs a counting global allocator; the counter is per thread so the test
+//! harness's threads do not interfere.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -43,6 +44,9 @@ fn hot_path_allocations<const NX: usize, const NU: usize>(model: &impl Model<NX,
     let (mut f, mut jac, mut jw) = ([0.0; NX], [[0.0; NX]; NX], [[0.0; NX]; 8]);
     let mut sparse = [0.0; 64];
     let mut ju = [[0.0; NU]; NX];
+    const L: usize = twv_model::lanes::LANES;
+    let (xl, ul, wl) = ([x; L], [u; L], [[0.3; NX]; L]);
+    let (mut fl, mut jwl, mut jul) = ([[0.0; NX]; L], [[0.0; NX]; L], [[[0.0; NU]; NX]; L]);
     let before = allocations();
     model.f(&x, &u, &mut f);
     model.jac_x(&x, &u, &mut jac);
@@ -50,8 +54,9 @@ fn hot_path_allocations<const NX: usize, const NU: usize>(model: &impl Model<NX,
     model.f_jw(&x, &u, &w, &mut f, &mut jw);
     model.jw(&x, &u, &w, &mut jw);
     model.f_jw_jac_u(&x, &u, &w, &mut f, &mut jw, &mut ju);
+    model.f_jw_jac_u_lanes(&xl, &ul, &wl, &mut fl, &mut jwl, &mut jul);
     let after = allocations();
-    std::hint::black_box((&f, &jac, &jw, &sparse, &ju));
+    std::hint::black_box((&f, &jac, &jw, &sparse, &ju, &fl, &jwl, &jul));
     after - before
 }
 
