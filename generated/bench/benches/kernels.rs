@@ -178,10 +178,10 @@ fn main() -> ExitCode {
         );
         black_box((&mut f, &mut out, &mut ju));
     });
+    const L: usize = twv_model::lanes::LANES;
     let lanes = time(plan, || {
-        let lanes = twv_model::lanes::LANES;
-        let (x, u, w) = ([pt.x; 8], [pt.u; 8], [pt.w[0]; 8]);
-        let (mut f, mut out, mut ju) = ([[0.0; NX]; 8], [[0.0; NX]; 8], [[[0.0; 2]; NX]; 8]);
+        let (x, u, w) = ([pt.x; L], [pt.u; L], [pt.w[0]; L]);
+        let (mut f, mut out, mut ju) = ([[0.0; NX]; L], [[0.0; NX]; L], [[[0.0; 2]; NX]; L]);
         black_box(&runtime).f_jw_jac_u_lanes(
             black_box(&x),
             black_box(&u),
@@ -190,13 +190,13 @@ fn main() -> ExitCode {
             &mut out,
             &mut ju,
         );
-        black_box((&mut f, &mut out, &mut ju, lanes));
+        black_box((&mut f, &mut out, &mut ju));
     });
     println!();
     println!(
         "closed-loop stage kernel (f, J·w for one w, ∂f/∂u): one point per call {one} ns, \
-         eight lanes per call {lanes} ns ({:.1} ns per point)",
-        lanes.median / 8.0
+         {L} lanes per call {lanes} ns ({:.1} ns per point)",
+        lanes.median / L as f64
     );
 
     // The Lyapunov floor: an RK4 stage cannot start before the previous stage's f is known, so
