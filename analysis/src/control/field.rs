@@ -122,9 +122,22 @@ impl<M, const NX: usize, const NU: usize, const NA: usize> Copy for PidLoop<'_, 
 /// e_i as a row.
 #[inline(always)]
 fn unit<const N: usize>(i: usize) -> [f64; N] {
-    let mut e = [0.0; N];
-    e[i] = 1.0;
-    e
+    with_entry([0.0; N], i, 1.0)
+}
+
+/// `a` with entry `i` replaced by `v`, written as a select over every entry rather than a
+/// store at a run-time index: the law's rows are read back as vectors right after, and a
+/// narrow store read by a wide load stalls store forwarding (the select form took the 100×100
+/// Lyapunov map from 15.7 to 14.6 s).
+#[inline(always)]
+fn with_entry<const N: usize>(a: [f64; N], i: usize, v: f64) -> [f64; N] {
+    core::array::from_fn(|j| if j == i { v } else { a[j] })
+}
+
+/// `a` with `v` added to entry `i` (`a[i] += v` in the select form of [`with_entry`]).
+#[inline(always)]
+fn plus_entry<const N: usize>(a: [f64; N], i: usize, v: f64) -> [f64; N] {
+    core::array::from_fn(|j| if j == i { a[j] + v } else { a[j] })
 }
 
 /// a += c b.
@@ -235,7 +248,7 @@ where
         let (mut phi_ref, dsp) = p.setpoint.eval(phi);
         let mut d_ref = zero;
         if GRAD {
-            d_ref[m.phi] = dsp;
+            d_ref = with_entry(d_ref, m.phi, dsp);
         }
         let mut zdot = [0.0; 3];
         let mut d_zdot = [zero; 3];
@@ -243,14 +256,14 @@ where
             let ev = vl.reference.value(t) - xa[iv];
             phi_ref += vl.kp * ev;
             if GRAD {
-                d_ref[iv] -= vl.kp;
+                d_ref = plus_entry(d_ref, iv, -vl.kp);
             }
             if let Some(iz) = lay.velocity_integral {
                 phi_ref += vl.ki * xa[iz];
                 zdot[2] = ev;
                 if GRAD {
-                    d_ref[iz] += vl.ki;
-                    d_zdot[2][iv] = -1.0;
+                    d_ref = plus_entry(d_ref, iz, vl.ki);
+                    d_zdot[2] = with_entry(d_zdot[2], iv, -1.0);
                 }
             }
         }
@@ -267,19 +280,19 @@ where
         let mut d_cmd = zero;
         if GRAD {
             axpy(&mut d_cmd, g.kp, &de);
-            d_cmd[rate_index] += g.kd;
+            d_cmd = plus_entry(d_cmd, rate_index, g.kd);
         }
         if let Some(iz) = lay.integral {
             force_cmd += g.ki * xa[iz];
             if GRAD {
-                d_cmd[iz] += g.ki;
+                d_cmd = plus_entry(d_cmd, iz, g.ki);
             }
         }
         if let (Some(tau), Some(iz)) = (p.derivative_filter, lay.filter) {
             zdot[1] = (xa[m.w_y] - xa[iz]) / tau;
             if GRAD {
-                d_zdot[1][m.w_y] = 1.0 / tau;
-                d_zdot[1][iz] = -1.0 / tau;
+                d_zdot[1] = with_entry(d_zdot[1], m.w_y, 1.0 / tau);
+                d_zdot[1] = with_entry(d_zdot[1], iz, -1.0 / tau);
             }
         }
 
@@ -319,7 +332,7 @@ where
         if let (Some(yl), Some(iw)) = (&s.yaw, m.w_z) {
             yaw = yl.kp * (yl.reference.value(t) - xa[iw]);
             if GRAD {
-                d_yaw[iw] = -yl.kp;
+                d_yaw = with_entry(d_yaw, iw, -yl.kp);
             }
         }
 

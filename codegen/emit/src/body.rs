@@ -55,7 +55,7 @@ pub fn lets(f: &Function, params: &Params) -> TokenStream {
 /// Per lane these are the operations of [`lets`], in the same order.
 pub fn lane_lets(f: &Function, params: &Params) -> TokenStream {
     let (a, b) = (format_ident!("a"), format_ident!("b"));
-    // sin and cos of one angle come from one `lanes::sin_cos` call (`scK` for value K).
+    // sin and cos of one angle come from one `lanes::wide::sin_cos` call (`scK` for value K).
     let mut sin_cos_done = std::collections::BTreeSet::new();
     let lets = f.instructions().iter().enumerate().map(|(k, instr)| {
         let v = value(k);
@@ -63,7 +63,7 @@ pub fn lane_lets(f: &Function, params: &Params) -> TokenStream {
             let sc = format_ident!("sc{}", x);
             let pair = if sin_cos_done.insert(x) {
                 let x = value(x);
-                quote!(let #sc = ::twv_model::lanes::sin_cos(#x);)
+                quote!(let #sc = ::twv_model::lanes::wide::sin_cos(#x);)
             } else {
                 TokenStream::new()
             };

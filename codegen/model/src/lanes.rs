@@ -4,8 +4,8 @@
 //! is what makes a map of many grid points cheaper per point than one point at a time.
 //!
 //! Each lane performs exactly the operations of the one-point kernel in the same order (sin and
-//! cos through the same [`crate::trig::sin_cos`]), so lane `l` of a result has the bits of the
-//! one-point kernel at point `l`.
+//! cos by [`wide::sin_cos`], which has the bits of [`crate::trig::sin_cos`]), so lane `l` of a
+//! result has the bits of the one-point kernel at point `l`.
 
 /// Points per lane array: one AVX-512 register of doubles.
 pub const LANES: usize = 8;
@@ -41,12 +41,10 @@ macro_rules! lanewise {
     };
 }
 
-/// (sin, cos) of every lane, one lane after the other through [`crate::trig::sin_cos`] (same
-/// bits as the one-point kernels). Not inlined on purpose: the branches of eight inline sincos
-/// would split the kernel into many basic blocks, and the vectoriser, which works within one
-/// block, would then leave the whole lane kernel scalar.
+/// (sin, cos) of every lane, one lane after the other through [`crate::trig::sin_cos`]: the
+/// rare path of [`wide::sin_cos`] (an argument for the C library), kept out of line.
 #[inline(never)]
-pub fn sin_cos(x: Lanes) -> (Lanes, Lanes) {
+pub fn sin_cos_each(x: Lanes) -> (Lanes, Lanes) {
     let (mut s, mut c) = ([0.0; LANES], [0.0; LANES]);
     for l in 0..LANES {
         (s[l], c[l]) = crate::trig::sin_cos(x[l]);
@@ -110,19 +108,25 @@ mod tests {
     }
 }
 
-/// Exact IEEE operations on all lanes at once with AVX-512 instructions. Only for code that runs
-/// in an AVX-512 build (the caller guarantees the CPU has it).
+/// Exact IEEE operations on all lanes at once with AVX-512 instructions. Each function is
+/// compiled for AVX-512F and VL: code built for those features (the lanes kernel) calls them
+/// directly, anything else only through `unsafe`, after checking [`crate::isa::avx512`].
 #[cfg(target_arch = "x86_64")]
 pub mod wide {
-    use super::Lanes;
+    use super::{Lanes, LANES};
     use core::arch::x86_64::*;
 
     macro_rules! op {
         ($name:ident, $intr:ident) => {
-            #[inline(always)]
+            /// The operation on every lane.
+            ///
+            /// # Safety
+            /// The CPU must have AVX-512F and AVX-512VL.
+            #[target_feature(enable = "avx512f,avx512vl")]
+            #[inline]
             pub fn $name(a: Lanes, b: Lanes) -> Lanes {
-                let mut out = [0.0; 8];
-                // SAFETY: only called from AVX-512 builds; unaligned loads/stores of 8 doubles.
+                let mut out = [0.0; LANES];
+                // SAFETY: unaligned loads and a store of 8 doubles from and to arrays of 8.
                 unsafe {
                     let r = $intr(_mm512_loadu_pd(a.as_ptr()), _mm512_loadu_pd(b.as_ptr()));
                     _mm512_storeu_pd(out.as_mut_ptr(), r);
@@ -135,4 +139,109 @@ pub mod wide {
     op!(sub, _mm512_sub_pd);
     op!(mul, _mm512_mul_pd);
     op!(div, _mm512_div_pd);
+
+    /// (sin, cos) of every lane with the bits of [`crate::trig::sin_cos`], all lanes in one
+    /// instruction stream: every lane takes every path (the three rounds of the reduction, both
+    /// forms of fdlibm's sine kernel) and keeps the one its scalar call would take, by masks.
+    /// The operations and their order are those of `trig.rs`, line for line. If any lane needs
+    /// the C library (|x| ≥ 2²⁰·π/2 or not finite) all go through [`super::sin_cos_each`].
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F and AVX-512VL ([`crate::isa::avx512`]); callers compiled
+    /// for those features (the lanes kernel) call it without `unsafe`.
+    #[target_feature(enable = "avx512f,avx512vl")]
+    #[inline]
+    pub fn sin_cos(x: Lanes) -> (Lanes, Lanes) {
+        use crate::trig::*;
+        let f = _mm512_set1_pd;
+        let i = _mm512_set1_epi64;
+        let (add, sub, mul) = (_mm512_add_pd, _mm512_sub_pd, _mm512_mul_pd);
+        // SAFETY: an unaligned load of the 8 doubles of `x`.
+        let xv = unsafe { _mm512_loadu_pd(x.as_ptr()) };
+        let high = _mm512_and_si512(
+            _mm512_srli_epi64::<32>(_mm512_castpd_si512(xv)),
+            i(0x7FFF_FFFF),
+        );
+        if _mm512_cmpge_epi64_mask(high, i(MEDIUM_HIGH.into())) != 0 {
+            return super::sin_cos_each(x);
+        }
+        let small = _mm512_cmple_epi64_mask(high, i(PIO4_HIGH.into()));
+        let tiny = _mm512_cmplt_epi64_mask(high, i(TINY_HIGH.into()));
+
+        // `reduce`: x = n·π/2 + (y0 + y1); n mod 4 is in the low bits of x·2/π + 1.5·2⁵².
+        let shifted = add(mul(xv, f(INV_PIO2)), f(TO_INT));
+        let fnum = sub(shifted, f(TO_INT));
+        let quadrant = _mm512_and_si512(_mm512_castpd_si512(shifted), i(3));
+        let exponent = |v: __m512d| {
+            _mm512_and_si512(_mm512_srli_epi64::<52>(_mm512_castpd_si512(v)), i(0x7FF))
+        };
+        let ex = _mm512_srli_epi64::<20>(high);
+        let r1 = sub(xv, mul(fnum, f(PIO2_1)));
+        let w1 = mul(fnum, f(PIO2_1T));
+        let y01 = sub(r1, w1);
+        let second = _mm512_cmpgt_epi64_mask(_mm512_sub_epi64(ex, exponent(y01)), i(16));
+        let w2 = mul(fnum, f(PIO2_2));
+        let r2 = sub(r1, w2);
+        let w2 = sub(mul(fnum, f(PIO2_2T)), sub(sub(r1, r2), w2));
+        let y02 = sub(r2, w2);
+        let third = second & _mm512_cmpgt_epi64_mask(_mm512_sub_epi64(ex, exponent(y02)), i(49));
+        let w3 = mul(fnum, f(PIO2_3));
+        let r3 = sub(r2, w3);
+        let w3 = sub(mul(fnum, f(PIO2_3T)), sub(sub(r2, r3), w3));
+        let y03 = sub(r3, w3);
+        let pick = |a, b, c| _mm512_mask_blend_pd(third, _mm512_mask_blend_pd(second, a, b), c);
+        let (r, w, y0) = (pick(r1, r2, r3), pick(w1, w2, w3), pick(y01, y02, y03));
+        let y1 = sub(sub(r, y0), w);
+        // |x| ≤ π/4: no reduction, y = (x, 0), quadrant 0.
+        let y0 = _mm512_mask_blend_pd(small, y0, xv);
+        let y1 = _mm512_mask_blend_pd(small, y1, f(0.0));
+        let quadrant = _mm512_mask_blend_epi64(small, quadrant, i(0));
+
+        // `kernel_sin`, with the tail (reduced lanes) and without (|x| ≤ π/4).
+        let z = mul(y0, y0);
+        let w = mul(z, z);
+        let r = add(
+            add(f(S2), mul(z, add(f(S3), mul(z, f(S4))))),
+            mul(mul(z, w), add(f(S5), mul(z, f(S6)))),
+        );
+        let v = mul(z, y0);
+        let with_tail = sub(
+            y0,
+            sub(
+                sub(mul(z, sub(mul(f(0.5), y1), mul(v, r))), y1),
+                mul(v, f(S1)),
+            ),
+        );
+        let without_tail = add(y0, mul(v, add(f(S1), mul(z, r))));
+        let s = _mm512_mask_blend_pd(small, with_tail, without_tail);
+        // `kernel_cos`.
+        let r = add(
+            mul(z, add(f(C1), mul(z, add(f(C2), mul(z, f(C3)))))),
+            mul(mul(w, w), add(f(C4), mul(z, add(f(C5), mul(z, f(C6)))))),
+        );
+        let hz = mul(f(0.5), z);
+        let w = sub(f(1.0), hz);
+        let c = add(w, add(sub(sub(f(1.0), w), hz), sub(mul(z, r), mul(y0, y1))));
+
+        // Quadrant: 0 (s, c), 1 (c, −s), 2 (−s, −c), 3 (−c, s); tiny |x|: (x, 1).
+        let odd = _mm512_test_epi64_mask(quadrant, i(1));
+        let neg_sin = _mm512_test_epi64_mask(quadrant, i(2));
+        let neg_cos = odd ^ neg_sin;
+        let negate = |m: __mmask8, v: __m512d| {
+            let flipped =
+                _mm512_castsi512_pd(_mm512_xor_si512(_mm512_castpd_si512(v), i(i64::MIN)));
+            _mm512_mask_blend_pd(m, v, flipped)
+        };
+        let sin = negate(neg_sin, _mm512_mask_blend_pd(odd, s, c));
+        let cos = negate(neg_cos, _mm512_mask_blend_pd(odd, c, s));
+        let sin = _mm512_mask_blend_pd(tiny, sin, xv);
+        let cos = _mm512_mask_blend_pd(tiny, cos, f(1.0));
+        let (mut so, mut co) = ([0.0; LANES], [0.0; LANES]);
+        // SAFETY: unaligned stores of 8 doubles into local arrays.
+        unsafe {
+            _mm512_storeu_pd(so.as_mut_ptr(), sin);
+            _mm512_storeu_pd(co.as_mut_ptr(), cos);
+        }
+        (so, co)
+    }
 }

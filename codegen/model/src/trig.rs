@@ -10,38 +10,38 @@
 //! bit-identical to each other.
 
 /// 53 bits of 2/π.
-const INV_PIO2: f64 = f64::from_bits(0x3FE4_5F30_6DC9_C883);
+pub(crate) const INV_PIO2: f64 = f64::from_bits(0x3FE4_5F30_6DC9_C883);
 /// π/2 in three 33-bit pieces and their tails (fdlibm's `pio2_1`, `pio2_1t`, ...).
-const PIO2_1: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
-const PIO2_1T: f64 = f64::from_bits(0x3DD0_B461_1A62_6331);
-const PIO2_2: f64 = f64::from_bits(0x3DD0_B461_1A60_0000);
-const PIO2_2T: f64 = f64::from_bits(0x3BA3_198A_2E03_7073);
-const PIO2_3: f64 = f64::from_bits(0x3BA3_198A_2E00_0000);
-const PIO2_3T: f64 = f64::from_bits(0x397B_839A_2520_49C1);
+pub(crate) const PIO2_1: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
+pub(crate) const PIO2_1T: f64 = f64::from_bits(0x3DD0_B461_1A62_6331);
+pub(crate) const PIO2_2: f64 = f64::from_bits(0x3DD0_B461_1A60_0000);
+pub(crate) const PIO2_2T: f64 = f64::from_bits(0x3BA3_198A_2E03_7073);
+pub(crate) const PIO2_3: f64 = f64::from_bits(0x3BA3_198A_2E00_0000);
+pub(crate) const PIO2_3T: f64 = f64::from_bits(0x397B_839A_2520_49C1);
 /// 1.5·2^52: adding and subtracting it rounds a double of magnitude < 2^51 to an integer.
-const TO_INT: f64 = 6_755_399_441_055_744.0;
+pub(crate) const TO_INT: f64 = 6_755_399_441_055_744.0;
 
 /// sin on [-π/4, π/4]: x − x³/6 + … (degree 13).
-const S1: f64 = f64::from_bits(0xBFC5_5555_5555_5549);
-const S2: f64 = f64::from_bits(0x3F81_1111_1110_F8A6);
-const S3: f64 = f64::from_bits(0xBF2A_01A0_19C1_61D5);
-const S4: f64 = f64::from_bits(0x3EC7_1DE3_57B1_FE7D);
-const S5: f64 = f64::from_bits(0xBE5A_E5E6_8A2B_9CEB);
-const S6: f64 = f64::from_bits(0x3DE5_D93A_5ACF_D57C);
+pub(crate) const S1: f64 = f64::from_bits(0xBFC5_5555_5555_5549);
+pub(crate) const S2: f64 = f64::from_bits(0x3F81_1111_1110_F8A6);
+pub(crate) const S3: f64 = f64::from_bits(0xBF2A_01A0_19C1_61D5);
+pub(crate) const S4: f64 = f64::from_bits(0x3EC7_1DE3_57B1_FE7D);
+pub(crate) const S5: f64 = f64::from_bits(0xBE5A_E5E6_8A2B_9CEB);
+pub(crate) const S6: f64 = f64::from_bits(0x3DE5_D93A_5ACF_D57C);
 /// cos on [-π/4, π/4]: 1 − x²/2 + … (degree 14).
-const C1: f64 = f64::from_bits(0x3FA5_5555_5555_554C);
-const C2: f64 = f64::from_bits(0xBF56_C16C_16C1_5177);
-const C3: f64 = f64::from_bits(0x3EFA_01A0_19CB_1590);
-const C4: f64 = f64::from_bits(0xBE92_7E4F_809C_52AD);
-const C5: f64 = f64::from_bits(0x3E21_EE9E_BDB4_B1C4);
-const C6: f64 = f64::from_bits(0xBDA8_FAE9_BE88_38D4);
+pub(crate) const C1: f64 = f64::from_bits(0x3FA5_5555_5555_554C);
+pub(crate) const C2: f64 = f64::from_bits(0xBF56_C16C_16C1_5177);
+pub(crate) const C3: f64 = f64::from_bits(0x3EFA_01A0_19CB_1590);
+pub(crate) const C4: f64 = f64::from_bits(0xBE92_7E4F_809C_52AD);
+pub(crate) const C5: f64 = f64::from_bits(0x3E21_EE9E_BDB4_B1C4);
+pub(crate) const C6: f64 = f64::from_bits(0xBDA8_FAE9_BE88_38D4);
 
 /// High 32 bits of |x|'s representation at and below which no reduction is needed (~π/4).
-const PIO4_HIGH: u32 = 0x3FE9_21FB;
+pub(crate) const PIO4_HIGH: u32 = 0x3FE9_21FB;
 /// ... below which sin x = x and cos x = 1 in double precision (|x| < 2^-27).
-const TINY_HIGH: u32 = 0x3E40_0000;
+pub(crate) const TINY_HIGH: u32 = 0x3E40_0000;
 /// ... at and above which the three-piece reduction is not exact enough (~2^20·π/2).
-const MEDIUM_HIGH: u32 = 0x4139_21FB;
+pub(crate) const MEDIUM_HIGH: u32 = 0x4139_21FB;
 
 unsafe extern "C" {
     #[link_name = "sin"]
