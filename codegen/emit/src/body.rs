@@ -195,7 +195,12 @@ fn binary(op: BinaryOp, a: &Ident, b: &Ident) -> TokenStream {
 
 /// The dense matrix of an output as rows of expressions (`vK` or `0.0`).
 pub fn dense(o: &Output) -> Vec<Vec<TokenStream>> {
-    let mut grid = vec![vec![quote!(0.0); o.cols]; o.rows];
+    dense_with(o, quote!(0.0))
+}
+
+/// The dense matrix of an output with `zero` at the structural zeros.
+fn dense_with(o: &Output, zero: TokenStream) -> Vec<Vec<TokenStream>> {
+    let mut grid = vec![vec![zero; o.cols]; o.rows];
     for (r, c, v) in o.entries() {
         let v = value(v);
         grid[r][c] = quote!(#v);
@@ -203,38 +208,41 @@ pub fn dense(o: &Output) -> Vec<Vec<TokenStream>> {
     grid
 }
 
-/// The dense matrix of an output over lane arrays (`vK` or zeros at every lane).
-fn lane_dense(o: &Output) -> Vec<Vec<TokenStream>> {
-    let mut grid = vec![vec![quote!(::twv_model::lanes::splat(0.0)); o.cols]; o.rows];
-    for (r, c, v) in o.entries() {
-        let v = value(v);
-        grid[r][c] = quote!(#v);
-    }
-    grid
+/// A lane array of zeros.
+fn lane_zero() -> TokenStream {
+    quote!(::twv_model::lanes::splat(0.0))
 }
 
-/// `[e0, e1, ...]` of a column-vector output over lane arrays.
-pub fn lane_vector_expr(o: &Output) -> TokenStream {
-    let items = lane_dense(o).into_iter().map(|row| quote!(#(#row),*));
+/// `[e0, e1, ...]` of the rows of a one-column grid.
+fn vector_of(grid: Vec<Vec<TokenStream>>) -> TokenStream {
+    let items = grid.into_iter().map(|row| quote!(#(#row),*));
     quote!([#(#items),*])
 }
 
-/// `[[...], ...]` (row-major) of a matrix output over lane arrays.
-pub fn lane_matrix_expr(o: &Output) -> TokenStream {
-    let rows = lane_dense(o).into_iter().map(|row| quote!([#(#row),*]));
+/// `[[...], ...]` (row-major) of a grid.
+fn matrix_of(grid: Vec<Vec<TokenStream>>) -> TokenStream {
+    let rows = grid.into_iter().map(|row| quote!([#(#row),*]));
     quote!([#(#rows),*])
 }
 
 /// `[e0, e1, ...]` of a column-vector output.
 pub fn vector_expr(o: &Output) -> TokenStream {
-    let items = dense(o).into_iter().map(|row| quote!(#(#row),*));
-    quote!([#(#items),*])
+    vector_of(dense(o))
 }
 
 /// `[[...], ...]` (row-major) of a matrix output.
 pub fn matrix_expr(o: &Output) -> TokenStream {
-    let rows = dense(o).into_iter().map(|row| quote!([#(#row),*]));
-    quote!([#(#rows),*])
+    matrix_of(dense(o))
+}
+
+/// [`vector_expr`] over lane arrays.
+pub fn lane_vector_expr(o: &Output) -> TokenStream {
+    vector_of(dense_with(o, lane_zero()))
+}
+
+/// [`matrix_expr`] over lane arrays.
+pub fn lane_matrix_expr(o: &Output) -> TokenStream {
+    matrix_of(dense_with(o, lane_zero()))
 }
 
 /// The column-form J·w of [`jw_columns`] for one tangent vector per lane: `out[r]` (lane
@@ -250,14 +258,14 @@ pub fn lane_jw_rows(jac: &Output) -> TokenStream {
                     let v = value(jac.values[e]);
                     quote!(#v)
                 }
-                None => quote!(::twv_model::lanes::splat(0.0)),
+                None => lane_zero(),
             };
             let c = index(*c);
             quote!(::twv_model::lanes::wide::mul(#entry, wl[#c]))
         });
         let mut terms = terms.collect::<Vec<_>>().into_iter();
         match terms.next() {
-            None => quote!(::twv_model::lanes::splat(0.0)),
+            None => lane_zero(),
             Some(first) => terms.fold(
                 first,
                 |acc, t| quote!(::twv_model::lanes::wide::add(#acc, #t)),
