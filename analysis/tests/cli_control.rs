@@ -525,6 +525,14 @@ fn non_positive_magnitude_and_times_are_rejected() {
     fails_with(&twv(&["linear", "--delay", "-1"]), &["delay", "-1"]);
     fails_with(&twv(&["tune", "--actuator-lag", "-1"]), &["lag", "-1"]);
     fails_with(&twv(&["linear", "--lqr-r", "0"]), &["--lqr-r"]);
+    for lean in ["2", "0", "-0.1", "nan"] {
+        let cmd = ["sim", "--v-loop", "0.08,0.03", "--lean-max", lean];
+        fails_with(&twv(&cmd), &["lean limit", "(0, π/2)"]);
+    }
+    fails_with(
+        &twv(&["sim", "--lean-max", "0.05"]),
+        &["--lean-max", "--v-loop"],
+    );
 }
 
 #[test]

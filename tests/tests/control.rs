@@ -159,6 +159,7 @@ fn closed_loop_tangent_is_exact_with_every_controller_part() {
             kp: 0.05,
             ki: 0.01,
             reference: Profile::constant(1.0),
+            lean_max: None,
         }),
         yaw: Some(YawLoop {
             kp: 40.0,
@@ -455,6 +456,7 @@ fn maneuver_tracks_the_velocity_reference_and_stops() {
             kp: 0.08,
             ki: 0.03,
             reference: profile,
+            lean_max: None,
         }),
         ..ControllerSettings::default()
     };
@@ -476,4 +478,59 @@ fn maneuver_tracks_the_velocity_reference_and_stops() {
     assert!((v[cruise_end] - 2.0).abs() < 0.2);
     assert!(r.metrics.final_v_x.unwrap().abs() < 0.05);
     assert!(r.metrics.final_phi.abs() < 0.01);
+}
+
+/// A 3 m/s velocity step with the force limited to 300 N: the unlimited velocity loop asks for a
+/// 0.24 rad lean at once, the recovery force saturates and the vehicle falls; with the lean
+/// limited to 0.05 rad the force stays in range and the vehicle reaches 3 m/s. While limited the
+/// tangent is the limit's (the lean's derivative vanishes, the integral holds).
+#[test]
+fn lean_limit_carries_a_saturating_velocity_step() {
+    let model = vehicle8();
+    let step = |lean_max| ControllerSettings {
+        pitch: PitchPid {
+            saturation: Some(300.0),
+            ..PitchPid::default()
+        },
+        velocity: Some(VelocityLoop {
+            kp: 0.08,
+            ki: 0.03,
+            reference: Profile::constant(3.0),
+            lean_max,
+        }),
+        ..ControllerSettings::default()
+    };
+    let run = RunSettings {
+        t_end: 25.0,
+        ..RunSettings::default()
+    };
+    let free = step(None);
+    let field = PidLoop::<_, 8, 2, 9>::new(&model, &free, plant8(&model)).unwrap();
+    let r = run_closed_loop(&field, &[0.0; 8], &run).unwrap();
+    assert!(
+        matches!(r.trajectory.end, RunEnd::Fell { .. }),
+        "without a lean limit the step should end in a fall: {:?}",
+        r.trajectory.end
+    );
+
+    let limited = step(Some(0.05));
+    let field = PidLoop::<_, 8, 2, 9>::new(&model, &limited, plant8(&model)).unwrap();
+    let r = run_closed_loop(&field, &[0.0; 8], &run).unwrap();
+    assert_eq!(r.trajectory.end, RunEnd::Completed);
+    let v_final = r.metrics.final_v_x.unwrap();
+    println!("lean-limited 3 m/s step: final v_x {v_final:.4} m/s");
+    assert!((v_final - 3.0).abs() < 0.06, "final v_x {v_final}");
+    // The setpoint never leans past the study setpoint plus the limit.
+    for (t, x) in r.trajectory.t.iter().zip(&r.trajectory.x) {
+        let xa: [f64; 9] = std::array::from_fn(|i| x.get(i).copied().unwrap_or(0.0));
+        let cmd = field.command(*t, &xa);
+        assert!(cmd.phi_ref.abs() <= 0.05 + 0.03 * x[0].sin().abs() + 1e-12);
+    }
+
+    // Limited (v_x = 0: e_v = 3, lean 0.24 → 0.05) and not (v_x = 2.9): exact tangents.
+    let mut x = [0.02, 0.0, 0.0, 0.0, 0.1, 0.0, 0.05, 0.3, 0.4];
+    assert!(field.command(0.0, &x).phi_ref > 0.049);
+    assert_tangent_exact(&field, 0.0, &x, "lean limited");
+    x[5] = 2.9;
+    assert_tangent_exact(&field, 0.0, &x, "lean within its limit");
 }

@@ -121,6 +121,7 @@ fn lanes_metric_has_the_bits_of_the_one_point_metric() {
             kp: 0.05,
             ki: 0.01,
             reference: Profile::constant(1.0),
+            lean_max: None,
         }),
         yaw: Some(YawLoop {
             kp: 40.0,

@@ -49,6 +49,10 @@ pub struct ControllerArgs {
     /// Constant forward-velocity reference for the velocity loop [m/s] [default: 0]
     #[arg(long, value_name = "M/S", allow_hyphen_values = true)]
     pub v_ref: Option<f64>,
+    /// Largest lean the velocity loop may ask for [rad] (its integral holds while limited)
+    /// [default: no limit]
+    #[arg(long, value_name = "RAD", allow_hyphen_values = true)]
+    pub lean_max: Option<f64>,
     /// Yaw-rate loop gain [N m per rad/s]: T = KP·(r_ref − w_z) on T2 (differential wheel torque
     /// for segway7) [default: no yaw loop]
     #[arg(long, value_name = "KP")]
@@ -173,6 +177,7 @@ impl ControllerArgs {
             || self.tracking_time.is_some()
             || self.v_loop.is_some()
             || self.v_ref.is_some()
+            || self.lean_max.is_some()
             || self.yaw_kp.is_some()
             || self.yaw_ref.is_some()
     }
@@ -206,10 +211,14 @@ impl ControllerArgs {
         if self.v_ref.is_some() && v_gains.is_none() {
             bail!("--v-ref needs the velocity loop: give --v-loop KP,KI");
         }
+        if self.lean_max.is_some() && v_gains.is_none() {
+            bail!("--lean-max needs the velocity loop: give --v-loop KP,KI");
+        }
         let velocity = v_gains.map(|(kp, ki)| VelocityLoop {
             kp,
             ki,
             reference: velocity.unwrap_or_else(|| Profile::constant(self.v_ref.unwrap_or(0.0))),
+            lean_max: self.lean_max,
         });
         if self.yaw_ref.is_some() && self.yaw_kp.is_none() {
             bail!("--yaw-ref needs the yaw loop: give --yaw-kp KP");

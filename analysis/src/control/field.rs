@@ -254,17 +254,34 @@ where
         let mut d_zdot = [zero; 3];
         if let (Some(vl), Some(iv)) = (&s.velocity, m.v_x) {
             let ev = vl.reference.value(t) - xa[iv];
-            phi_ref += vl.kp * ev;
+            let mut lean = vl.kp * ev;
+            let mut d_lean = zero;
             if GRAD {
-                d_ref = plus_entry(d_ref, iv, -vl.kp);
+                d_lean = with_entry(d_lean, iv, -vl.kp);
             }
             if let Some(iz) = lay.velocity_integral {
-                phi_ref += vl.ki * xa[iz];
+                lean += vl.ki * xa[iz];
                 zdot[2] = ev;
                 if GRAD {
-                    d_ref = plus_entry(d_ref, iz, vl.ki);
+                    d_lean = plus_entry(d_lean, iz, vl.ki);
                     d_zdot[2] = with_entry(d_zdot[2], iv, -1.0);
                 }
+            }
+            // Lean limit: the active branch's derivative (zero while limited), and the
+            // integral holds while the error pushes further into the limit.
+            if let Some(lm) = vl.lean_max {
+                if lean.abs() > lm {
+                    lean = lm.copysign(lean);
+                    d_lean = zero;
+                    if ev * lean > 0.0 {
+                        zdot[2] = 0.0;
+                        d_zdot[2] = zero;
+                    }
+                }
+            }
+            phi_ref += lean;
+            if GRAD {
+                axpy(&mut d_ref, 1.0, &d_lean);
             }
         }
         let e = phi - phi_ref;

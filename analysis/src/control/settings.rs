@@ -132,6 +132,12 @@ pub struct VelocityLoop {
     pub ki: f64,
     /// Forward-velocity reference v_ref(t) [m/s].
     pub reference: Profile,
+    /// Largest lean the loop may ask for, |kp·e_v + ki·∫e_v| ≤ lean_max [rad]; its integral
+    /// stops while the limit holds and the error pushes further (conditional anti-windup).
+    /// Without it a large velocity step asks for a lean whose recovery force saturates the
+    /// motor and the vehicle falls.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lean_max: Option<f64>,
 }
 
 /// Outer loop on the yaw rate: T = kp (r_ref − w_z), on T2 (or as differential wheel torque).
@@ -220,6 +226,14 @@ impl ControllerSettings {
         if let Some(v) = &self.velocity {
             check("velocity kp", v.kp, v.kp >= 0.0, "must be finite and ≥ 0")?;
             check("velocity ki", v.ki, v.ki >= 0.0, "must be finite and ≥ 0")?;
+            if let Some(lean) = v.lean_max {
+                check(
+                    "lean limit [rad]",
+                    lean,
+                    lean > 0.0 && lean < core::f64::consts::FRAC_PI_2,
+                    "must be in (0, π/2)",
+                )?;
+            }
         }
         if let Some(y) = &self.yaw {
             check("yaw kp", y.kp, y.kp > 0.0, "must be finite and > 0")?;
