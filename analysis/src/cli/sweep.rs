@@ -188,19 +188,19 @@ impl ControlTask for Chunk<'_> {
         let x0: [f64; NX] = to_array(&self.config.x0);
         let plant = plant(model, loaded)?;
         let s = &self.config.settings;
+        let controller_at = |index: usize| {
+            let gains = self.config.grid.gains(index);
+            self.args.controller.settings(gains, None, None)
+        };
         let mut out = Vec::with_capacity(self.indices.len());
-        let mut rest = self.indices;
+        let mut rest = self.indices.clone();
         if self.config.metric == Metric::MaxLyapunov {
             // Eight points at a time through the lanes kernel (same bits as one by one).
             while rest.len() >= LANES {
                 let group: [usize; LANES] = std::array::from_fn(|l| rest.start + l);
                 let controllers = group
                     .iter()
-                    .map(|&i| {
-                        self.args
-                            .controller
-                            .settings(self.config.grid.gains(i), None, None)
-                    })
+                    .map(|&i| controller_at(i))
                     .collect::<Result<Vec<_>>>()?;
                 let loops = controllers
                     .iter()
@@ -215,8 +215,7 @@ impl ControlTask for Chunk<'_> {
             }
         }
         for index in rest {
-            let gains = self.config.grid.gains(index);
-            let controller = self.args.controller.settings(gains, None, None)?;
+            let controller = controller_at(index)?;
             let field = PidLoop::<_, NX, NU, NA>::new(model, &controller, plant)?;
             out.push(match self.config.metric {
                 Metric::MaxLyapunov => metric::max_lyapunov(&field, &x0, s, index),

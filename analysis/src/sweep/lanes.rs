@@ -6,9 +6,9 @@
 //! (`tests/tests/sweep_lanes.rs` checks it) and still depends only on its index.
 //!
 //! The points share the time grid (same h, T and horizon), so one clock drives them all. A
-//! point that falls, blows up or degenerates is finished with that status and from then on
-//! carried along at its start state (its results are ignored; a finite state keeps the lanes
-//! kernel on its fast path); the group stops when every point is finished.
+//! point that falls, blows up or degenerates is finished with that status and from then on put
+//! back to its start state after every step (its results are ignored; a finite state near the
+//! start keeps the lanes kernel on its fast path); the group stops when every point is finished.
 
 use twv_model::lanes::LANES;
 use twv_model::Model;
@@ -60,13 +60,12 @@ where
             });
             t = if step == steps { t_stop } else { t + h };
             for l in 0..LANES {
-                if finished[l].is_some() {
-                    continue;
-                }
-                if !finite[l] {
-                    finished[l] = Some(Status::BlewUp);
-                } else if y[l].x[phi].abs() > s.fall_angle {
-                    finished[l] = Some(Status::Fell);
+                if finished[l].is_none() {
+                    if !finite[l] {
+                        finished[l] = Some(Status::BlewUp);
+                    } else if y[l].x[phi].abs() > s.fall_angle {
+                        finished[l] = Some(Status::Fell);
+                    }
                 }
                 if finished[l].is_some() {
                     y[l] = start[l];
@@ -78,7 +77,6 @@ where
         }
         for l in 0..LANES {
             if finished[l].is_some() {
-                y[l] = start[l];
                 continue;
             }
             let r = orthonormalize(&mut y[l].w)[0];
@@ -86,7 +84,6 @@ where
                 log_sum[l] += r.ln();
             } else {
                 finished[l] = Some(Status::Failed);
-                y[l] = start[l];
             }
         }
     }

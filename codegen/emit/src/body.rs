@@ -263,14 +263,9 @@ pub fn lane_jw_rows(jac: &Output) -> TokenStream {
             let c = index(*c);
             quote!(::twv_model::lanes::wide::mul(#entry, wl[#c]))
         });
-        let mut terms = terms.collect::<Vec<_>>().into_iter();
-        match terms.next() {
-            None => lane_zero(),
-            Some(first) => terms.fold(
-                first,
-                |acc, t| quote!(::twv_model::lanes::wide::add(#acc, #t)),
-            ),
-        }
+        terms
+            .reduce(|acc, t| quote!(::twv_model::lanes::wide::add(#acc, #t)))
+            .unwrap_or_else(lane_zero)
     });
     quote!([#(#rows),*])
 }

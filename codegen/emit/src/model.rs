@@ -422,15 +422,7 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
             ::twv_model::lanes::scatter(&#jw, out_lanes);
             {
                 #ju_body
-                let ju: [[::twv_model::lanes::Lanes; #nu]; #nx] = #ju_out;
-                for (l, jl) in jac_u_lanes.iter_mut().enumerate() {
-                    let jl = ::core::hint::black_box(jl);
-                    for (row, lanes_row) in jl.iter_mut().zip(&ju) {
-                        for (v, lanes) in row.iter_mut().zip(lanes_row) {
-                            *v = lanes[l];
-                        }
-                    }
-                }
+                ::twv_model::lanes::scatter_matrix(&#ju_out, jac_u_lanes);
             }
         }
     })

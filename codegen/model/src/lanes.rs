@@ -81,6 +81,22 @@ pub fn scatter<const N: usize>(lanes: &[Lanes; N], rows: &mut [[f64; N]; LANES])
     }
 }
 
+/// [`scatter`] for a matrix: `out[l][r][c] = lanes[r][c][l]`.
+#[inline(always)]
+pub fn scatter_matrix<const R: usize, const C: usize>(
+    lanes: &[[Lanes; C]; R],
+    out: &mut [[[f64; C]; R]; LANES],
+) {
+    for (l, matrix) in out.iter_mut().enumerate() {
+        let matrix = core::hint::black_box(matrix);
+        for (row, lanes_row) in matrix.iter_mut().zip(lanes) {
+            for (v, lane) in row.iter_mut().zip(lanes_row) {
+                *v = lane[l];
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -98,13 +114,22 @@ mod tests {
     }
 
     #[test]
-    fn scatter_inverts_gather() {
+    fn scatters_invert_gather() {
         let rows: [[f64; 3]; LANES] = core::array::from_fn(|l| [l as f64, -(l as f64), 0.5]);
         let lanes = gather(&rows);
         assert_eq!(lanes[1][5], -5.0);
         let mut back = [[0.0; 3]; LANES];
         scatter(&lanes, &mut back);
         assert_eq!(back, rows);
+        let matrices: [[[f64; 3]; 2]; LANES] =
+            core::array::from_fn(|l| [rows[l], [0.25 * l as f64, 1.0, -2.0]]);
+        let lanes = [
+            gather(&matrices.map(|m| m[0])),
+            gather(&matrices.map(|m| m[1])),
+        ];
+        let mut back = [[[0.0; 3]; 2]; LANES];
+        scatter_matrix(&lanes, &mut back);
+        assert_eq!(back, matrices);
     }
 }
 
