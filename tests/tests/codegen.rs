@@ -470,7 +470,11 @@ fn visit_interpreted_dispatches_ir_sizes() {
     let (nx, nu, rate) = twv_ir::visit_interpreted(&ir, &ir.defaults(), FirstRate).unwrap();
     let mut f = [0.0; 7];
     Segway7::with_defaults().f(&[0.1; 7], &[1.0; 2], &mut f);
-    assert_eq!((nx, nu, rate.to_bits()), (7, 2, f[6].to_bits()));
+    // Every interpreted model gets MAX_NU inputs: segway7's two, then padding it never reads.
+    assert_eq!(
+        (nx, nu, rate.to_bits()),
+        (7, twv_ir::MAX_NU, f[6].to_bits())
+    );
     let err = twv_ir::visit_interpreted(&ir, &[1.0], FirstRate).unwrap_err();
     assert!(err.to_string().contains("16 parameters"), "{err}");
 }
@@ -773,7 +777,14 @@ mod malformed_ir {
                 .contains("lorenz.json: the model has 3 states, the caller expects 4"),
             "{err}"
         );
-        assert!(twv_ir::Interpreted::<3, 1>::with_defaults(&ir).is_err());
+        // More inputs than the IR's are padding (zero columns of ∂f/∂u), fewer are an error.
+        let padded = twv_ir::Interpreted::<3, 2>::with_defaults(&ir).unwrap();
+        let mut ju = [[f64::NAN; 2]; 3];
+        twv_model::Model::jac_u(&padded, &[1.0, 2.0, 3.0], &[5.0, 7.0], &mut ju);
+        assert_eq!(ju, [[0.0; 2]; 3]);
+        let segway = super::shipped_ir("segway7");
+        let err = twv_ir::Interpreted::<7, 1>::with_defaults(&segway).unwrap_err();
+        assert!(err.to_string().contains("2 inputs"), "{err}");
         assert!(twv_ir::Interpreted::<3, 0>::new(&ir, &[1.0, 2.0]).is_err());
         assert!(twv_ir::Interpreted::<3, 0>::new(&ir, &[1.0, f64::NAN, 2.0]).is_err());
     }

@@ -10,7 +10,7 @@
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use twv_generated::{Segway7, Vehicle7, Vehicle8};
-use twv_ir::Interpreted;
+use twv_ir::{Interpreted, MAX_NU};
 use twv_model::Model;
 
 use super::model::{parse_vector, LoadedModel, Source};
@@ -305,14 +305,14 @@ pub fn dispatch_control<T: ControlTask>(
         Source::File(path) => {
             let ir = &loaded.ir;
             let p = &loaded.params;
+            // Interpreted models take 4 inputs, the real ones first (see `twv_ir::Interpreted`).
             match (ir.nx(), ir.nu()) {
-                (8, 2) => with_na!(Interpreted::<8, 2>::new(ir, p)?, 8, 2),
-                (7, 2) => with_na!(Interpreted::<7, 2>::new(ir, p)?, 7, 2),
-                (4, 1) => with_na!(Interpreted::<4, 1>::new(ir, p)?, 4, 1),
-                (4, 2) => with_na!(Interpreted::<4, 2>::new(ir, p)?, 4, 2),
+                (8, 1 | 2) => with_na!(Interpreted::<8, MAX_NU>::new(ir, p)?, 8, 4),
+                (7, 1 | 2) => with_na!(Interpreted::<7, MAX_NU>::new(ir, p)?, 7, 4),
+                (4, 1 | 2) => with_na!(Interpreted::<4, MAX_NU>::new(ir, p)?, 4, 4),
                 (nx, nu) => bail!(
                     "{}: {nx} states and {nu} inputs; the control commands support IR models \
-                     with 8 or 7 states and 2 inputs, or 4 states and 1 or 2 inputs",
+                     with 8, 7 or 4 states and 1 or 2 inputs",
                     path.display()
                 ),
             }

@@ -55,9 +55,11 @@ impl ModelTask for Eval<'_> {
             let mut ju = [[0.0; NU]; NX];
             model.jac_x(&x, &u, &mut jx);
             model.jac_u(&x, &u, &mut ju);
+            // An interpreted model may carry padding inputs after its own (see twv_ir).
+            let nu = info.inputs.len();
             (
                 Some(jx.iter().map(|r| r.to_vec()).collect()),
-                Some(ju.iter().map(|r| r.to_vec()).collect()),
+                Some(ju.iter().map(|r| r[..nu].to_vec()).collect()),
             )
         } else {
             (None, None)

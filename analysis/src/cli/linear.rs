@@ -142,8 +142,11 @@ impl ModelTask for Linear<'_> {
         }
         let (lqr, lqr_note) = match lin.subsystem(&LQR_STATES) {
             Ok((a_sub, b_sub)) => {
+                // Only the model's own inputs (an interpreted model may carry padding ones).
+                let nu = info.inputs.len();
+                let b_sub = b_sub.columns(0, nu).into_owned();
                 let q = DMatrix::identity(LQR_STATES.len(), LQR_STATES.len()) * args.lqr_q;
-                let r = DMatrix::identity(NU, NU) * args.lqr_r;
+                let r = DMatrix::identity(nu, nu) * args.lqr_r;
                 (Some(lqr(&a_sub, &b_sub, &q, &r)?), None)
             }
             Err(e) => (None, Some(e.to_string())),

@@ -177,7 +177,7 @@ fn table<M: Model<NX, NU>, const NX: usize, const NU: usize, const NA: usize>(
             let mut row = Vec::with_capacity(columns.len());
             row.push(*t);
             row.extend_from_slice(x);
-            row.extend_from_slice(&c.u);
+            row.extend_from_slice(&c.u[..info.inputs.len()]);
             row.extend([c.phi_ref, c.force_cmd, c.force, c.yaw]);
             row.extend(v_ref.map(|r| r.value(*t)));
             row

@@ -76,6 +76,9 @@ pub struct DopriOptions {
     pub fac_max: f64,
     /// PI stabilisation exponent (0 = plain I controller). Default 0.04, Hairer's value.
     pub beta: f64,
+    /// Most steps (accepted and rejected) before [`IntegrateError::TooManySteps`]. Default
+    /// [`MAX_STEPS`](super::MAX_STEPS).
+    pub max_steps: u64,
 }
 
 impl Default for DopriOptions {
@@ -91,6 +94,7 @@ impl Default for DopriOptions {
             fac_min: 0.2,
             fac_max: 10.0,
             beta: 0.04,
+            max_steps: super::MAX_STEPS,
         }
     }
 }
@@ -133,6 +137,13 @@ impl DopriOptions {
         }
         if !(0.0..0.2).contains(&self.beta) {
             return bad(&format!("beta = {} must be in [0, 0.2)", self.beta));
+        }
+        if self.max_steps == 0 || self.max_steps > super::MAX_STEPS {
+            return bad(&format!(
+                "max_steps = {} must be in 1..={}",
+                self.max_steps,
+                super::MAX_STEPS
+            ));
         }
         Ok(())
     }
@@ -470,6 +481,14 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Stepper<N, K> for Dopri5
                 return Err(IntegrateError::StepSizeUnderflow {
                     t: self.t,
                     h,
+                    x: self.y.x.to_vec(),
+                });
+            }
+            if self.steps + self.rejected >= opts.max_steps {
+                return Err(IntegrateError::TooManySteps {
+                    t: self.t,
+                    h,
+                    max_steps: opts.max_steps,
                     x: self.y.x.to_vec(),
                 });
             }

@@ -50,6 +50,19 @@ pub enum IntegrateError {
         /// The state at `t`.
         x: Vec<f64>,
     },
+    /// The adaptive integrator took more steps than its budget: the step size collapsed over a
+    /// long stretch (stiffness, a near-singularity) or the horizon is too long for the tolerance.
+    #[error("more than {max_steps} integrator steps by t = {t} (h = {h:e}, state x = {x:?}): loosen the tolerances or shorten the run")]
+    TooManySteps {
+        /// Time reached.
+        t: f64,
+        /// Last step size tried.
+        h: f64,
+        /// The budget.
+        max_steps: u64,
+        /// The state at `t`.
+        x: Vec<f64>,
+    },
     /// The initial state is not finite.
     #[error("non-finite initial {part} at t = {t}: x = {x:?}")]
     NonFiniteInitial {

@@ -40,3 +40,8 @@ pub use rk4::Rk4;
 pub(crate) use rk4::{equal_steps, rk4_step_each, Rk4Scratch};
 pub use state::VarState;
 pub use stepper::{Stepper, StopReason};
+
+/// The most integrator steps one run may take (fixed steps are refused up front by the settings
+/// that ask for more, adaptive ones stop with [`IntegrateError::TooManySteps`]): minutes
+/// (about ten for a vehicle's full variational system), so no input can make a run hang.
+pub const MAX_STEPS: u64 = 1_000_000_000;

@@ -1,17 +1,26 @@
 //! The Benettin–QR driver.
+//!
+//! Only the integration loop is generic over the system (`N`, `K`, the stepper): everything
+//! after it — sorting, standard errors, the classification — is one non-generic function on
+//! slices ([`finish`]), so the hundreds of (model, exponent count, integrator) combinations the
+//! binary dispatches to share one copy of it.
 
 use crate::integrate::{Dopri5, Rk4, Stepper, VectorField};
 
 use super::classify::{classify, SignRule};
 use super::result::{LyapunovResult, RunDetails, RunningEstimates};
-use super::stats::{batch_means_stderr, kaplan_yorke};
+use super::stats::{kaplan_yorke, stderr_of_batch_means};
 use super::{initial_basis, orthonormalize, IntegratorChoice, LyapunovError, LyapunovSettings};
+
+/// The most rows of running estimates a run keeps: longer runs record every ⌈K / this⌉-th
+/// interval (and always the last), so memory stays bounded however many intervals are asked
+/// for, while the convergence figure keeps far more points than it can show.
+pub const MAX_RUNNING_ROWS: usize = 100_000;
 
 /// The `K` largest Lyapunov exponents of ẋ = F(t, x) from `x0` at t = 0 (`K = N`: the full
 /// spectrum), with the integrator, basis and horizon of `settings`.
 ///
-/// `field` may be a reference (`&OpenLoop`, `&ClosedLoop`, …). The CLI's runtime `--k` maps to
-/// the const `K` by a `match` over 1..=N.
+/// `field` may be a reference (`&OpenLoop`, `&ClosedLoop`, …).
 pub fn lyapunov_spectrum<F, const N: usize, const K: usize>(
     field: F,
     x0: &[f64; N],
@@ -62,21 +71,25 @@ where
         reorthonormalize(&mut stepper)?;
     }
 
-    // Measurement.
+    // Measurement: the log sums, the batch sums of the local exponents, and (decimated) the
+    // running estimates; nothing grows with the number of intervals beyond those rows.
     let t0 = stepper.t();
     let q0 = stepper.state().trace_integral;
     let n = settings.iterations;
+    let batches = Batches::new(n, settings.batches);
+    let mut batch_sums = vec![0.0; batches.count * K];
     let mut log_sums = [0.0; K];
-    let mut local = Vec::with_capacity(n * K);
+    let stride = n.div_ceil(MAX_RUNNING_ROWS).max(1);
     let mut running = RunningEstimates {
         k: K,
         ..RunningEstimates::default()
     };
     if settings.record_running {
-        running.t.reserve(n);
-        running.values.reserve(n * K);
-        running.sum.reserve(n);
-        running.mean_trace.reserve(n);
+        let rows = n.div_ceil(stride) + 1;
+        running.t.reserve(rows);
+        running.values.reserve(rows * K);
+        running.sum.reserve(rows);
+        running.mean_trace.reserve(rows);
     }
     let (mut max_speed, mut max_norm) = (0.0f64, 0.0f64);
     let mut f = [0.0; N];
@@ -87,15 +100,18 @@ where
         let r = reorthonormalize(&mut stepper)?;
         let (t, y) = (stepper.t(), stepper.state());
         let dt = t - t_prev;
-        for (s, r) in log_sums.iter_mut().zip(r.iter()) {
+        let batch = batches.of(i);
+        for (k, (s, r)) in log_sums.iter_mut().zip(r.iter()).enumerate() {
             let lr = r.ln();
             *s += lr;
-            local.push(lr / dt);
+            if let Some(b) = batch {
+                batch_sums[b * K + k] += lr / dt;
+            }
         }
         stepper.field().rhs(t, &y.x, &mut f);
         max_speed = max_speed.max(norm(&f));
         max_norm = max_norm.max(norm(&y.x));
-        if settings.record_running {
+        if settings.record_running && (i % stride == 0 || i == n) {
             let elapsed = t - t0;
             running.t.push(elapsed);
             running.values.extend(log_sums.iter().map(|s| s / elapsed));
@@ -108,54 +124,110 @@ where
         }
     }
     let t_total = stepper.t() - t0;
-    let raw: Vec<f64> = log_sums.iter().map(|s| s / t_total).collect();
-
-    // Sort descending and carry the order through every per-exponent series.
-    let mut order: Vec<usize> = (0..K).collect();
-    order.sort_by(|&a, &b| raw[b].total_cmp(&raw[a]));
-    let exponents: Vec<f64> = order.iter().map(|&k| raw[k]).collect();
-    let local = permute_rows(&local, &order);
-    running.values = permute_rows(&running.values, &order);
-    let stderr: Vec<f64> = (0..K)
-        .map(|k| {
-            let column: Vec<f64> = local.iter().skip(k).step_by(K).copied().collect();
-            batch_means_stderr(&column, settings.batches)
-        })
-        .collect();
-
-    let sum = exponents.iter().sum();
-    let mean_trace = trace.then(|| (stepper.state().trace_integral - q0) / t_total);
-    let at_equilibrium = max_speed * t_total <= 1e-9 * max_norm.max(1.0);
-    let rule = SignRule {
-        z: settings.significance,
-        zero_band: settings.zero_band,
-        convergence_tol: settings.convergence_tol,
-        horizon: t_total,
-    };
-    let classification = classify(&exponents, &stderr, &rule, at_equilibrium);
-    Ok(LyapunovResult {
-        kaplan_yorke: kaplan_yorke(&exponents, K == N),
-        exponents,
-        stderr,
-        sum,
-        mean_trace,
-        classification,
-        t_total,
-        running,
-        details: RunDetails {
+    let y = stepper.state();
+    Ok(finish(
+        Measured {
+            log_sums: &log_sums,
+            batch_means: batch_sums.iter().map(|s| s / batches.size as f64).collect(),
+            running,
+            t_total,
+            mean_trace: trace.then(|| (y.trace_integral - q0) / t_total),
+            max_speed,
+            max_norm,
+            full_spectrum: K == N,
+        },
+        settings,
+        RunDetails {
             t_transient: t0 - t_begin,
             t_sample,
             intervals: n,
             steps: stepper.steps(),
             full_spectrum: K == N,
-            at_equilibrium,
+            at_equilibrium: false,
             max_speed,
             max_norm,
             final_time: stepper.t(),
-            final_state: stepper.state().x.to_vec(),
-            local,
+            final_state: y.x.to_vec(),
         },
-    })
+    ))
+}
+
+/// The batches of the batch-means error: the last `count · size` of the `n` intervals cut into
+/// `count` consecutive batches of `size`; leftover intervals at the start (the least converged
+/// end) belong to none.
+struct Batches {
+    count: usize,
+    size: usize,
+    first: usize,
+}
+
+impl Batches {
+    fn new(n: usize, count: usize) -> Self {
+        let size = (n / count.max(1)).max(1);
+        let count = count.min(n);
+        Self {
+            count,
+            size,
+            first: n - count * size,
+        }
+    }
+
+    /// The batch of interval `i` (1-based).
+    fn of(&self, i: usize) -> Option<usize> {
+        (i > self.first).then(|| ((i - 1 - self.first) / self.size).min(self.count - 1))
+    }
+}
+
+/// What the integration loop measured, before sorting and judging.
+struct Measured<'a> {
+    /// Σ log R_kk per tangent vector, in the stepper's order.
+    log_sums: &'a [f64],
+    /// Batch means of the local exponents, batch-major, `log_sums.len()` per batch.
+    batch_means: Vec<f64>,
+    running: RunningEstimates,
+    t_total: f64,
+    mean_trace: Option<f64>,
+    max_speed: f64,
+    max_norm: f64,
+    full_spectrum: bool,
+}
+
+/// Sorts, estimates the errors and classifies: the non-generic end of every run.
+fn finish(m: Measured, settings: &LyapunovSettings, mut details: RunDetails) -> LyapunovResult {
+    let k = m.log_sums.len();
+    let raw: Vec<f64> = m.log_sums.iter().map(|s| s / m.t_total).collect();
+    // Sort descending and carry the order through every per-exponent series.
+    let mut order: Vec<usize> = (0..k).collect();
+    order.sort_by(|&a, &b| raw[b].total_cmp(&raw[a]));
+    let exponents: Vec<f64> = order.iter().map(|&i| raw[i]).collect();
+    let mut running = m.running;
+    running.values = permute_rows(&running.values, &order);
+    let stderr: Vec<f64> = order
+        .iter()
+        .map(|&i| {
+            let column: Vec<f64> = m.batch_means.iter().skip(i).step_by(k).copied().collect();
+            stderr_of_batch_means(&column)
+        })
+        .collect();
+    let sum = exponents.iter().sum();
+    let at_equilibrium = m.max_speed * m.t_total <= 1e-9 * m.max_norm.max(1.0);
+    details.at_equilibrium = at_equilibrium;
+    let rule = SignRule::from_settings(settings, m.t_total, &exponents);
+    let (classification, signs) = classify(&exponents, &stderr, &rule, at_equilibrium);
+    LyapunovResult {
+        kaplan_yorke: kaplan_yorke(&exponents, m.full_spectrum),
+        exponents,
+        stderr,
+        significance: settings.significance,
+        zero_floor: rule.floor,
+        signs,
+        sum,
+        mean_trace: m.mean_trace,
+        classification,
+        t_total: m.t_total,
+        running,
+        details,
+    }
 }
 
 /// Replaces the stepper's tangents by Q of their QR and returns R's (positive) diagonal.
@@ -195,4 +267,20 @@ fn permute_rows(values: &[f64], order: &[usize]) -> Vec<f64> {
 
 fn norm<const N: usize>(v: &[f64; N]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Batches;
+
+    #[test]
+    fn batches_drop_the_leftover_at_the_start() {
+        let b = Batches::new(23, 5);
+        assert_eq!((b.count, b.size, b.first), (5, 4, 3));
+        assert_eq!(b.of(3), None);
+        assert_eq!(b.of(4), Some(0));
+        assert_eq!(b.of(7), Some(0));
+        assert_eq!(b.of(8), Some(1));
+        assert_eq!(b.of(23), Some(4));
+    }
 }

@@ -1,20 +1,64 @@
 //! An honest verbal classification of a finite-time spectrum.
+//!
+//! Each exponent's sign is decided from its own standard error and an absolute floor, never
+//! from the size of the other exponents: a large negative exponent (a strongly contracting
+//! direction) must not make a small positive one look like zero. The largest |λ| only sets the
+//! resolution below which an exponent whose sign is not significant still counts as zero rather
+//! than as "not converged".
 
 use std::fmt;
 
+use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
+use super::LyapunovSettings;
+
 /// What the data say about the sign of one exponent.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ExponentSign {
-    /// Above zero by more than its error and the zero band.
+    /// Above zero by more than z·σ and the floor.
     Positive,
-    /// Below zero by more than its error and the zero band.
+    /// Below zero by more than z·σ and the floor.
     Negative,
-    /// Zero within the error or the zero band, with a small error.
+    /// Not significantly signed, with an error bar inside the resolution.
     Zero,
-    /// Neither sign nor zero can be claimed: the error is too large.
+    /// Neither sign nor zero can be claimed: the error bar is larger than the resolution.
     Undecided,
+}
+
+/// Which test decided an exponent's sign.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SignTest {
+    /// |λ| exceeds both z·σ and the floor: the sign is significant.
+    Significant,
+    /// |λ| is within z·σ or the floor, and z·σ is within the resolution: zero.
+    WithinResolution,
+    /// |λ| is within z·σ, and z·σ exceeds the resolution: the sign is not resolved.
+    ErrorTooLarge,
+}
+
+impl fmt::Display for SignTest {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            SignTest::Significant => "|λ| > z·σ and > floor",
+            SignTest::WithinResolution => "|λ| ≤ max(z·σ, floor), z·σ ≤ resolution",
+            SignTest::ErrorTooLarge => "|λ| ≤ z·σ, z·σ > resolution",
+        })
+    }
+}
+
+/// How one exponent's sign was decided, with the numbers the test used.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SignDecision {
+    /// The verdict.
+    pub sign: ExponentSign,
+    /// The error bar z·σ (σ the batch-means standard error); `None` when σ is unknown (too few
+    /// intervals), which counts as an infinite error.
+    pub error: Option<f64>,
+    /// The test that decided.
+    pub test: SignTest,
 }
 
 /// The verdict on a spectrum. Finite-time exponents are estimates: a positive one shows
@@ -42,7 +86,7 @@ pub enum Classification {
         /// Significantly positive exponents.
         positive: usize,
     },
-    /// The exponent at `index` (descending order) is `value ± error` (z·stderr) with its sign
+    /// The exponent at `index` (descending order) is `value ± error` (z·σ) with its sign
     /// undecided: run longer.
     NotConverged {
         /// Index in the sorted spectrum.
@@ -51,7 +95,23 @@ pub enum Classification {
         value: f64,
         /// z · its standard error.
         error: f64,
+        /// The z-score.
+        z: f64,
     },
+}
+
+impl Classification {
+    /// A short machine-readable name of the verdict.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Classification::Equilibrium { .. } => "equilibrium",
+            Classification::StableFixedPoint => "stable_fixed_point",
+            Classification::Neutral { .. } => "neutral",
+            Classification::Positive { positive: 1 } => "chaotic",
+            Classification::Positive { .. } => "hyperchaotic",
+            Classification::NotConverged { .. } => "not_converged",
+        }
+    }
 }
 
 impl fmt::Display for Classification {
@@ -67,113 +127,154 @@ impl fmt::Display for Classification {
             ),
             Classification::StableFixedPoint => write!(
                 f,
-                "all exponents < 0 beyond their errors: attracted to a fixed point (finite-time estimate)"
+                "all exponents significantly negative: attracted to a fixed point (finite-time estimate)"
             ),
             Classification::Neutral { zero, of } if zero == of => write!(
                 f,
-                "all exponents zero within error: regular (periodic, quasi-periodic or integrable) motion, no exponential divergence detected (finite-time estimate)"
+                "all exponents zero within their errors: regular (periodic, quasi-periodic or integrable) motion, no exponential divergence detected (finite-time estimate)"
             ),
             Classification::Neutral { zero, .. } => write!(
                 f,
-                "all exponents ≤ 0 within error, {zero} consistent with zero: a marginally stable set (zero exponents come from symmetry directions such as position and heading, and from uncontrolled drift) or a periodic or quasi-periodic attractor (finite-time estimate)"
+                "no exponent significantly positive, {zero} zero within their errors: no exponential divergence detected; a marginally stable set (drift or symmetry directions) or a periodic or quasi-periodic attractor (finite-time estimate)"
             ),
             Classification::Positive { positive: 1 } => write!(
                 f,
-                "one positive exponent significantly above its error: chaotic if the orbit is bounded (finite-time estimate)"
+                "one exponent significantly positive: chaotic if the orbit is bounded (finite-time estimate)"
             ),
             Classification::Positive { positive } => write!(
                 f,
-                "{positive} positive exponents significantly above their errors: hyperchaotic if the orbit is bounded (finite-time estimate)"
+                "{positive} exponents significantly positive: hyperchaotic if the orbit is bounded (finite-time estimate)"
             ),
-            Classification::NotConverged { index, value, error } => write!(
+            Classification::NotConverged {
+                index,
+                value,
+                error,
+                z,
+            } => write!(
                 f,
-                "finite-time estimate, not converged: the sign of λ{} = {value:.4} ± {error:.4} is undecided; run longer",
+                "finite-time estimate, not converged: the sign of λ{} = {value:+.4} ± {error:.4} ({z}σ) is undecided; run longer",
                 index + 1
             ),
         }
     }
 }
 
-/// Serialised as its description, the form the `--json` output carries.
+/// Serialised as `{"kind": …, "text": …}` (plus the counts of the verdict).
 impl Serialize for Classification {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_str(self)
+        let mut map = s.serialize_map(None)?;
+        map.serialize_entry("kind", self.kind())?;
+        match *self {
+            Classification::Equilibrium { unstable } => {
+                map.serialize_entry("unstable", &unstable)?
+            }
+            Classification::Neutral { zero, .. } => map.serialize_entry("zero", &zero)?,
+            Classification::Positive { positive } => map.serialize_entry("positive", &positive)?,
+            Classification::NotConverged { index, .. } => map.serialize_entry("index", &index)?,
+            Classification::StableFixedPoint => {}
+        }
+        map.serialize_entry("text", &self.to_string())?;
+        map.end()
     }
 }
 
-/// How the signs are decided (from [`LyapunovSettings`](super::LyapunovSettings)).
+/// How the signs are decided.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SignRule {
     /// z-score for significance.
     pub z: f64,
-    /// Fraction of the spectral scale inside which an exponent counts as zero.
-    pub zero_band: f64,
-    /// Largest z·stderr, as a fraction of the scale, that still allows calling an exponent zero.
-    pub convergence_tol: f64,
-    /// Averaging horizon (s): the spectral scale is max(max|λ|, 1/horizon), because a
-    /// finite-time exponent cannot resolve rates below ~1/horizon (this keeps an all-zero
-    /// spectrum from being judged against its own round-off).
-    pub horizon: f64,
+    /// Absolute floor [1/s]: |λ| at or below it is never called significant.
+    pub floor: f64,
+    /// An exponent that is not significant counts as zero when its error bar z·σ is at most
+    /// this [1/s], else as undecided.
+    pub resolution: f64,
 }
 
-/// The sign of each exponent of a spectrum with its standard errors.
-pub fn exponent_signs(exponents: &[f64], stderr: &[f64], rule: &SignRule) -> Vec<ExponentSign> {
-    let SignRule {
-        z,
-        zero_band,
-        convergence_tol,
-        horizon,
-    } = *rule;
-    let scale = exponents.iter().fold(1.0 / horizon, |m, l| m.max(l.abs()));
-    exponents
-        .iter()
-        .zip(stderr)
-        .map(|(&l, &s)| {
-            // A NaN error (too few samples) is as bad as an infinite one.
-            let e = if s.is_nan() { f64::INFINITY } else { z * s };
-            let band = zero_band * scale;
-            if l > e && l > band {
-                ExponentSign::Positive
-            } else if -l > e && -l > band {
-                ExponentSign::Negative
-            } else if e <= convergence_tol * scale || (l.abs() <= band && e <= band) {
-                ExponentSign::Zero
-            } else {
-                ExponentSign::Undecided
-            }
-        })
-        .collect()
+impl SignRule {
+    /// The rule of `settings` for a run of horizon `t_total` whose exponents are `exponents`.
+    ///
+    /// The default floor is ln(K²)/T over K intervals of a horizon T (at least 1/T): the
+    /// finite-time exponent of a tangent vector that grows only like t² over the run, as along
+    /// a marginal direction with a shear or a double zero eigenvalue, so polynomial growth is
+    /// not taken for exponential divergence. The resolution is the larger of the floor and
+    /// `convergence_tol` · max|λ|.
+    pub fn from_settings(settings: &LyapunovSettings, t_total: f64, exponents: &[f64]) -> Self {
+        let intervals = (t_total / settings.t_sample).round().max(1.0);
+        let floor = settings
+            .zero_floor
+            .unwrap_or_else(|| (2.0 * intervals.ln()).max(1.0) / t_total);
+        let largest = exponents.iter().fold(0.0_f64, |m, l| m.max(l.abs()));
+        Self {
+            z: settings.significance,
+            floor,
+            resolution: floor.max(settings.convergence_tol * largest),
+        }
+    }
+
+    /// The sign of one exponent with its standard error.
+    pub fn decide(&self, value: f64, stderr: f64) -> SignDecision {
+        // A NaN error (too few samples) is as bad as an infinite one.
+        let error = (!stderr.is_nan()).then_some(self.z * stderr);
+        let e = error.unwrap_or(f64::INFINITY);
+        let beyond = e.max(self.floor);
+        let (sign, test) = if value > beyond {
+            (ExponentSign::Positive, SignTest::Significant)
+        } else if -value > beyond {
+            (ExponentSign::Negative, SignTest::Significant)
+        } else if e <= self.resolution {
+            (ExponentSign::Zero, SignTest::WithinResolution)
+        } else {
+            (ExponentSign::Undecided, SignTest::ErrorTooLarge)
+        };
+        SignDecision { sign, error, test }
+    }
 }
 
-/// The verdict for a spectrum sorted in descending order with its standard errors.
-/// `at_equilibrium` says the orbit did not move (ẋ ≈ 0 throughout).
+/// The verdict and the per-exponent decisions for a spectrum sorted in descending order with
+/// its standard errors. `at_equilibrium` says the orbit did not move (ẋ ≈ 0 throughout).
 pub fn classify(
     exponents: &[f64],
     stderr: &[f64],
     rule: &SignRule,
     at_equilibrium: bool,
+) -> (Classification, Vec<SignDecision>) {
+    let signs: Vec<SignDecision> = exponents
+        .iter()
+        .zip(stderr)
+        .map(|(&l, &s)| rule.decide(l, s))
+        .collect();
+    let verdict = verdict(exponents, &signs, rule.z, at_equilibrium);
+    (verdict, signs)
+}
+
+/// The verdict from per-exponent decisions (`exponents` sorted descending, z the z-score).
+pub fn verdict(
+    exponents: &[f64],
+    signs: &[SignDecision],
+    z: f64,
+    at_equilibrium: bool,
 ) -> Classification {
-    let signs = exponent_signs(exponents, stderr, rule);
-    let count = |s: ExponentSign| signs.iter().filter(|&&x| x == s).count();
+    let count = |s: ExponentSign| signs.iter().filter(|d| d.sign == s).count();
     if at_equilibrium {
-        return Classification::Equilibrium {
+        Classification::Equilibrium {
             unstable: count(ExponentSign::Positive),
-        };
-    }
-    if let Some(index) = signs.iter().position(|&s| s == ExponentSign::Undecided) {
-        return Classification::NotConverged {
+        }
+    } else if let Some(index) = signs.iter().position(|d| d.sign == ExponentSign::Undecided) {
+        Classification::NotConverged {
             index,
             value: exponents[index],
-            error: rule.z * stderr[index],
-        };
-    }
-    match count(ExponentSign::Positive) {
-        0 if count(ExponentSign::Zero) == 0 => Classification::StableFixedPoint,
-        0 => Classification::Neutral {
-            zero: count(ExponentSign::Zero),
-            of: exponents.len(),
-        },
-        positive => Classification::Positive { positive },
+            error: signs[index].error.unwrap_or(f64::INFINITY),
+            z,
+        }
+    } else {
+        match count(ExponentSign::Positive) {
+            0 if count(ExponentSign::Zero) == 0 => Classification::StableFixedPoint,
+            0 => Classification::Neutral {
+                zero: count(ExponentSign::Zero),
+                of: exponents.len(),
+            },
+            positive => Classification::Positive { positive },
+        }
     }
 }
 
@@ -181,17 +282,20 @@ pub fn classify(
 mod tests {
     use super::*;
 
+    const RULE: SignRule = SignRule {
+        z: 3.0,
+        floor: 0.005,
+        resolution: 0.01,
+    };
+
+    fn c(l: &[f64], s: &[f64]) -> Classification {
+        classify(l, s, &RULE, false).0
+    }
+
     #[test]
     fn verdicts() {
-        let rule = SignRule {
-            z: 3.0,
-            zero_band: 0.01,
-            convergence_tol: 0.05,
-            horizon: 10.0,
-        };
-        let c = |l: &[f64], s: &[f64]| classify(l, s, &rule, false);
         assert_eq!(
-            c(&[0.9, 0.001, -14.5], &[0.02, 0.01, 0.02]),
+            c(&[0.9, 0.001, -14.5], &[0.02, 0.001, 0.02]),
             Classification::Positive { positive: 1 }
         );
         assert_eq!(
@@ -199,14 +303,54 @@ mod tests {
             Classification::StableFixedPoint
         );
         assert_eq!(
-            c(&[0.001, -2.0], &[0.01, 0.01]),
+            c(&[0.001, -2.0], &[0.001, 0.01]),
             Classification::Neutral { zero: 1, of: 2 }
         );
         assert!(matches!(
             c(&[0.3, -1.0], &[0.2, 0.01]),
             Classification::NotConverged { index: 0, .. }
         ));
-        let json = serde_json::to_string(&Classification::StableFixedPoint).unwrap();
-        assert!(json.starts_with("\"all exponents < 0"));
+        let json = serde_json::to_value(Classification::StableFixedPoint).unwrap();
+        assert_eq!(json["kind"], "stable_fixed_point");
+        assert!(json["text"].as_str().unwrap().starts_with("all exponents"));
+    }
+
+    /// A large negative exponent does not hide small positive ones (hyper-Rössler-like
+    /// spectrum): the decision uses each exponent's own error, and flips when the error does.
+    #[test]
+    fn a_contracting_direction_does_not_hide_positive_exponents() {
+        let rule = SignRule {
+            z: 3.0,
+            floor: 3e-4,
+            resolution: 0.05 * 24.7,
+        };
+        let l = [0.110, 0.021, 0.0001, -24.7];
+        let (verdict, signs) = classify(&l, &[0.003, 0.001, 0.0002, 0.01], &rule, false);
+        assert_eq!(verdict, Classification::Positive { positive: 2 });
+        assert_eq!(signs[1].sign, ExponentSign::Positive);
+        assert_eq!(signs[2].sign, ExponentSign::Zero);
+        assert_eq!(verdict.kind(), "hyperchaotic");
+        // The same λ2 with a ten times larger error is no longer significant.
+        let (verdict, signs) = classify(&l, &[0.003, 0.01, 0.0002, 0.01], &rule, false);
+        assert_eq!(signs[1].sign, ExponentSign::Zero);
+        assert_eq!(verdict, Classification::Positive { positive: 1 });
+    }
+
+    #[test]
+    fn the_floor_absorbs_polynomial_growth() {
+        // λ above 3σ but below the floor: zero, decided by the floor.
+        let d = RULE.decide(0.004, 0.0001);
+        assert_eq!(
+            (d.sign, d.test),
+            (ExponentSign::Zero, SignTest::WithinResolution)
+        );
+        let d = RULE.decide(0.006, 0.0001);
+        assert_eq!(
+            (d.sign, d.test),
+            (ExponentSign::Positive, SignTest::Significant)
+        );
+        // Unknown error: never significant, never zero.
+        let d = RULE.decide(1.0, f64::NAN);
+        assert_eq!((d.sign, d.error), (ExponentSign::Undecided, None));
     }
 }

@@ -25,20 +25,26 @@ pub enum SettingsError {
     /// Bad adaptive-integrator options.
     #[error("dopri options: {0}")]
     Dopri(IntegrateError),
-    /// Batch means need 2 ≤ batches ≤ iterations.
-    #[error("batches = {batches} must be in 2..={iterations} (the number of iterations)")]
+    /// Batch means need at least two batches.
+    #[error("batches = {batches} must be ≥ 2")]
     Batches {
         /// Batches requested.
         batches: usize,
-        /// Iterations.
-        iterations: usize,
     },
     /// The z-score must be positive.
     #[error("significance = {0} must be finite and > 0")]
     Significance(f64),
-    /// The zero band is a fraction in [0, 1).
-    #[error("zero_band = {0} must be in [0, 1)")]
-    ZeroBand(f64),
+    /// The zero floor must be finite and non-negative.
+    #[error("zero_floor = {0} must be finite and ≥ 0 [1/s]")]
+    ZeroFloor(f64),
+    /// The run would take more fixed steps than any run may.
+    #[error("the run needs {steps:.3e} RK4 steps ((transient + t_sample · iterations) / h); at most {max:e} are allowed: raise h or shorten the run")]
+    TooManySteps {
+        /// Steps the settings ask for.
+        steps: f64,
+        /// The limit.
+        max: u64,
+    },
     /// The convergence tolerance must be positive.
     #[error("convergence_tol = {0} must be finite and > 0")]
     ConvergenceTol(f64),

@@ -31,10 +31,12 @@ mod settings;
 mod stats;
 
 pub use basis::initial_basis;
-pub use benettin::{lyapunov_spectrum, lyapunov_spectrum_with};
-pub use classify::{classify, exponent_signs, Classification, ExponentSign, SignRule};
+pub use benettin::{lyapunov_spectrum, lyapunov_spectrum_with, MAX_RUNNING_ROWS};
+pub use classify::{
+    classify, verdict, Classification, ExponentSign, SignDecision, SignRule, SignTest,
+};
 pub use error::{LyapunovError, SettingsError};
 pub use qr::orthonormalize;
 pub use result::{LyapunovResult, RunDetails, RunningEstimates};
 pub use settings::{InitialBasis, IntegratorChoice, LyapunovSettings};
-pub use stats::{batch_means_stderr, kaplan_yorke};
+pub use stats::{batch_means_stderr, kaplan_yorke, stderr_of_batch_means};

@@ -5,20 +5,26 @@ use std::io::{self, Write};
 
 use serde::Serialize;
 
-use super::Classification;
+use super::{Classification, SignDecision};
 
 /// A Lyapunov spectrum with its diagnostics.
 ///
-/// Serialises (serde) to exactly the `twv lyap --json` object
-/// `{"exponents", "stderr", "sum", "mean_trace", "kaplan_yorke", "classification", "t_total"}`;
+/// Serialises (serde) to the `twv lyap --json` object `{"exponents", "stderr", "significance",
+/// "zero_floor", "signs", "sum", "mean_trace", "kaplan_yorke", "classification", "t_total"}`;
 /// the running estimates and run details are kept out of it and written separately
 /// ([`RunningEstimates::write_csv`]).
 #[derive(Debug, Clone, Serialize)]
 pub struct LyapunovResult {
     /// The exponents λ_1 ≥ … ≥ λ_K (1/s).
     pub exponents: Vec<f64>,
-    /// Batch-means standard error of each exponent (same order).
+    /// Batch-means standard error σ of each exponent (same order; one standard error, not z·σ).
     pub stderr: Vec<f64>,
+    /// The z-score of the sign tests: an exponent is significant beyond z·σ.
+    pub significance: f64,
+    /// The absolute floor of the sign tests [1/s].
+    pub zero_floor: f64,
+    /// How each exponent's sign was decided (same order).
+    pub signs: Vec<SignDecision>,
     /// Σλ.
     pub sum: f64,
     /// Time average of tr(∂f/∂x) over the same horizon and trajectory (`None` if the trace
@@ -41,6 +47,37 @@ pub struct LyapunovResult {
 }
 
 impl LyapunovResult {
+    /// The `k` largest exponents of a spectrum computed with more (what a run of `k` tangent
+    /// vectors gives: the first `k` columns of a QR do not depend on the later ones). Each kept
+    /// exponent keeps its sign decision; Σλ, the running estimates and the verdict are those of
+    /// the kept ones; ⟨tr J⟩ and the Kaplan–Yorke dimension, known from the full spectrum, stay.
+    pub fn largest(mut self, k: usize) -> Self {
+        let k = k.clamp(1, self.exponents.len());
+        let n = self.exponents.len();
+        self.exponents.truncate(k);
+        self.stderr.truncate(k);
+        self.signs.truncate(k);
+        self.sum = self.exponents.iter().sum();
+        let r = &mut self.running;
+        r.values = r
+            .values
+            .chunks_exact(n)
+            .flat_map(|row| row[..k].iter().copied())
+            .collect();
+        r.sum = (0..r.t.len())
+            .map(|i| r.values[i * k..(i + 1) * k].iter().sum())
+            .collect();
+        r.k = k;
+        self.classification = super::classify::verdict(
+            &self.exponents,
+            &self.signs,
+            self.significance,
+            self.details.at_equilibrium,
+        );
+        self.details.full_spectrum = k == n && self.details.full_spectrum;
+        self
+    }
+
     /// |Σλ − ⟨tr J⟩| relative to max(max|λ|, 1/t_total): the identity check for a full spectrum
     /// (`None` without the trace quadrature).
     pub fn trace_residual(&self) -> Option<f64> {
@@ -76,13 +113,12 @@ pub struct RunDetails {
     pub final_time: f64,
     /// State at the end.
     pub final_state: Vec<f64>,
-    /// Local (one-interval) exponents, interval-major, `exponents.len()` per interval, in the
-    /// sorted order of the final exponents.
-    pub local: Vec<f64>,
 }
 
-/// Running estimates λ_k(t) = (1/t) Σ log R_kk at each re-orthonormalisation, t measured from
-/// the end of the transient: the convergence plot (the study's Fig. 3).
+/// Running estimates λ_k(t) = (1/t) Σ log R_kk at the re-orthonormalisations, t measured from
+/// the end of the transient: the convergence plot (the study's Fig. 3). Every interval up to
+/// [`MAX_RUNNING_ROWS`](super::MAX_RUNNING_ROWS) intervals, evenly thinned beyond (the last
+/// interval always kept).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RunningEstimates {
     /// Number of exponents per row.

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::SettingsError;
-use crate::integrate::DopriOptions;
+use crate::integrate::{DopriOptions, MAX_STEPS};
 
 /// Which integrator carries the variational system.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -63,11 +63,14 @@ pub struct LyapunovSettings {
     pub batches: usize,
     /// z-score for calling an exponent significantly positive or negative. Default 3.
     pub significance: f64,
-    /// Exponents with |λ| ≤ `zero_band` · max|λ| count as zero whatever their error: the
-    /// finite-time value of a zero exponent decays only like 1/t. Default 0.01.
-    pub zero_band: f64,
-    /// An exponent whose sign is undecided and whose error (z·stderr) exceeds
-    /// `convergence_tol` · max|λ| makes the run "not converged". Default 0.05.
+    /// Absolute floor [1/s]: an exponent with |λ| at or below it is never called positive or
+    /// negative. `None` (default): ln(K²)/T for K intervals over the horizon T (at least 1/T),
+    /// the finite-time exponent of a direction that grows only like t² (see
+    /// [`SignRule::from_settings`](super::SignRule::from_settings)).
+    pub zero_floor: Option<f64>,
+    /// An exponent that is not significantly signed counts as zero when its error bar z·σ is
+    /// at most max(floor, `convergence_tol` · max|λ|), and makes the run "not converged"
+    /// otherwise. Default 0.05.
     pub convergence_tol: f64,
     /// Record running estimates at every re-orthonormalisation. Default true.
     pub record_running: bool,
@@ -84,7 +87,7 @@ impl Default for LyapunovSettings {
             trace_check: true,
             batches: 10,
             significance: 3.0,
-            zero_band: 0.01,
+            zero_floor: None,
             convergence_tol: 0.05,
             record_running: true,
         }
@@ -119,6 +122,12 @@ impl LyapunovSettings {
         if self.iterations == 0 {
             return Err(SettingsError::NoIterations);
         }
+        if self.iterations as u64 > MAX_STEPS {
+            return Err(SettingsError::TooManySteps {
+                steps: self.iterations as f64,
+                max: MAX_STEPS,
+            });
+        }
         if !(self.transient.is_finite() && self.transient >= 0.0) {
             return Err(SettingsError::Transient(self.transient));
         }
@@ -130,20 +139,28 @@ impl LyapunovSettings {
                         t_sample: self.t_sample,
                     });
                 }
+                let steps = (self.transient + self.horizon()) / h;
+                if steps > MAX_STEPS as f64 {
+                    return Err(SettingsError::TooManySteps {
+                        steps,
+                        max: MAX_STEPS,
+                    });
+                }
             }
             IntegratorChoice::Dopri(o) => o.validate().map_err(SettingsError::Dopri)?,
         }
-        if self.batches < 2 || self.batches > self.iterations {
+        if self.batches < 2 {
             return Err(SettingsError::Batches {
                 batches: self.batches,
-                iterations: self.iterations,
             });
         }
         if !pos(self.significance) {
             return Err(SettingsError::Significance(self.significance));
         }
-        if !(self.zero_band.is_finite() && (0.0..1.0).contains(&self.zero_band)) {
-            return Err(SettingsError::ZeroBand(self.zero_band));
+        if let Some(floor) = self.zero_floor {
+            if !(floor.is_finite() && floor >= 0.0) {
+                return Err(SettingsError::ZeroFloor(floor));
+            }
         }
         if !pos(self.convergence_tol) {
             return Err(SettingsError::ConvergenceTol(self.convergence_tol));

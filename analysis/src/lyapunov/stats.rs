@@ -19,7 +19,16 @@ pub fn batch_means_stderr(samples: &[f64], batches: usize) -> f64 {
         .chunks_exact(m)
         .map(|c| c.iter().sum::<f64>() / m as f64)
         .collect();
-    let b = batches as f64;
+    stderr_of_batch_means(&means)
+}
+
+/// The standard error of the overall mean from the means of equal batches: their standard
+/// deviation over √(number of batches); NaN for fewer than two batches.
+pub fn stderr_of_batch_means(means: &[f64]) -> f64 {
+    if means.len() < 2 {
+        return f64::NAN;
+    }
+    let b = means.len() as f64;
     let mean = means.iter().sum::<f64>() / b;
     let var = means.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (b - 1.0);
     (var / b).sqrt()

@@ -104,6 +104,10 @@ impl Program {
 /// A model evaluated by interpreting its IR: implements [`Model`] (and [`Mechanical`] for
 /// multibody models) with the same numbers as the generated code.
 ///
+/// `NX` is the IR's number of states; `NU` may exceed its number of inputs: the extra inputs are
+/// padding that the equations never read (their columns of ∂f/∂u are zero, and
+/// [`ModelInfo::inputs`] names only the real ones), so one `NU` serves every input count.
+///
 /// Evaluations use one preallocated work vector behind a `RefCell`, so a value is `Send` but not
 /// `Sync`: give each thread its own clone. No method allocates after construction.
 #[derive(Debug, Clone)]
@@ -129,7 +133,9 @@ impl<const NX: usize, const NU: usize> Interpreted<NX, NU> {
             }
         };
         size("states", ir.nx(), NX)?;
-        size("inputs", ir.nu(), NU)?;
+        if ir.nu() > NU {
+            size("inputs", ir.nu(), NU)?;
+        }
         let program = Arc::new(Program::new(ir));
         Self::from_program(program, params)
     }
@@ -228,16 +234,21 @@ impl<const NX: usize, const NU: usize> Interpreted<NX, NU> {
         }
     }
 
+    /// Output `function` as an R × C matrix whose first `cols` columns the IR holds (the rest,
+    /// padding inputs, are zero).
     fn matrix<const R: usize, const C: usize>(
         &self,
         function: &str,
-        x: &[f64],
-        u: &[f64],
+        (x, u): (&[f64], &[f64]),
+        cols: usize,
         out: &mut [[f64; C]; R],
     ) {
-        if !self.dense((function, function), (x, u), (R, C), |r, c, v| {
-            out[r][c] = v
-        }) {
+        out.iter_mut().for_each(|row| row.fill(0.0));
+        if cols > C
+            || !self.dense((function, function), (x, u), (R, cols), |r, c, v| {
+                out[r][c] = v
+            })
+        {
             out.iter_mut().for_each(|row| row.fill(f64::NAN));
         }
     }
@@ -257,11 +268,11 @@ impl<const NX: usize, const NU: usize> Model<NX, NU> for Interpreted<NX, NU> {
     }
 
     fn jac_x(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NX]; NX]) {
-        self.matrix("jac_x", x, u, out);
+        self.matrix("jac_x", (x, u), NX, out);
     }
 
     fn jac_u(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NU]; NX]) {
-        self.matrix("jac_u", x, u, out);
+        self.matrix("jac_u", (x, u), self.program.ir.nu(), out);
     }
 
     fn jac_x_colind(&self) -> &[usize] {
@@ -324,7 +335,7 @@ impl<const NX: usize, const NU: usize, const NS: usize> Mechanical<NX, NU, NS>
     for Interpreted<NX, NU>
 {
     fn mass_matrix(&self, x: &[f64; NX], out: &mut [[f64; NS]; NS]) {
-        self.matrix("M", x, &[0.0; NU], out);
+        self.matrix("M", (x, &[0.0; NU]), NS, out);
     }
 
     fn cp(&self, x: &[f64; NX], out: &mut [f64; NS]) {
@@ -381,15 +392,17 @@ macro_rules! dispatch_sizes {
         }
     }};
     (@nu $ir:ident, $params:ident, $visitor:ident, $nx:literal, [$($nu:literal),*]) => {
-        match $ir.nu() {
+        match MAX_NU {
             $($nu => Ok($visitor.visit(Interpreted::<$nx, $nu>::new($ir, $params)?)),)*
             _ => Err(unsupported($ir)),
         }
     };
 }
 
-const MAX_NX: usize = 12;
-const MAX_NU: usize = 4;
+/// The largest state count [`visit_interpreted`] dispatches.
+pub const MAX_NX: usize = 12;
+/// The input count every interpreted model is given (real inputs first, then padding).
+pub const MAX_NU: usize = 4;
 
 fn unsupported(ir: &Ir) -> VisitError {
     VisitError::Size(UnsupportedSize {
@@ -402,13 +415,16 @@ fn unsupported(ir: &Ir) -> VisitError {
 }
 
 /// Run `visitor` on the interpreted model of `ir` with `params` (IR order), choosing the const
-/// sizes `NX`, `NU` from the IR at run time: how `--ir FILE` reaches code generic over
-/// [`Model`]. Each supported (NX, NU) pair instantiates the visitor once, so this costs compile
-/// time in the caller: 10 × 3 instantiations (1 to 10 states, 0 to 2 inputs).
+/// size `NX` from the IR at run time: how `--ir FILE` reaches code generic over [`Model`]. Each
+/// state count instantiates the visitor once (1 to 12), always with `NU` = 4 inputs, the real
+/// ones followed by padding (see [`Interpreted`]), so this costs the caller 12 instantiations.
 pub fn visit_interpreted<V: twv_model::ModelVisitor>(
     ir: &Ir,
     params: &[f64],
     visitor: V,
 ) -> Result<V::Output, VisitError> {
-    dispatch_sizes!(ir, params, visitor; 1, 2, 3, 4, 5, 6, 7, 8, 9, 10; [0, 1, 2])
+    if ir.nu() > MAX_NU {
+        return Err(unsupported(ir));
+    }
+    dispatch_sizes!(ir, params, visitor; 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12; [4])
 }

@@ -22,7 +22,7 @@ pub use error::{
 };
 pub use hash::{content_hash, rehash, sha256_hex, HASH_PLACEHOLDER};
 pub use infix::{formulas, Formulas};
-pub use interp::{visit_interpreted, Interpreted, UnsupportedSize, VisitError};
+pub use interp::{visit_interpreted, Interpreted, UnsupportedSize, VisitError, MAX_NU, MAX_NX};
 pub use ops::{BinaryOp, UnaryOp};
 pub use params::{check_values, load_params, parse_params};
 pub use types::{
