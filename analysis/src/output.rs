@@ -18,6 +18,56 @@ pub enum OutputError {
     },
 }
 
+/// The files of a result, in memory: (name relative to the output folder, bytes). Jobs build
+/// them without touching the disk; [`Files::write`] is the one shared step that does.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Files(pub Vec<(String, Vec<u8>)>);
+
+impl Files {
+    /// No files yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A text file.
+    pub fn text(&mut self, name: &str, text: impl Into<String>) {
+        self.0.push((name.to_string(), text.into().into_bytes()));
+    }
+
+    /// A pretty-printed JSON file.
+    pub fn json<T: serde::Serialize>(&mut self, name: &str, value: &T) {
+        let text = serde_json::to_string_pretty(value).unwrap_or_else(|e| format!("{e}"));
+        self.text(name, text + "\n");
+    }
+
+    /// A figure as `name` (ending in `.svg`) and its PNG beside it.
+    pub fn figure(
+        &mut self,
+        name: &str,
+        figure: &crate::plot::Figure,
+    ) -> Result<(), crate::plot::PlotError> {
+        self.text(name, figure.svg()?);
+        let stem = name.strip_suffix(".svg").unwrap_or(name);
+        self.0.push((format!("{stem}.png"), figure.png()?));
+        Ok(())
+    }
+
+    /// The names, in order.
+    pub fn names(&self) -> Vec<&str> {
+        self.0.iter().map(|(n, _)| n.as_str()).collect()
+    }
+
+    /// Writes every file into `dir` (created if missing, subfolders too), each atomically;
+    /// all or nothing: after a failure nothing of this call is left.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, OutputError> {
+        let mut out = OutputDir::create(dir)?;
+        for (name, bytes) in &self.0 {
+            out.write(name, bytes)?;
+        }
+        Ok(out.commit())
+    }
+}
+
 /// A folder receiving the files of one run.
 ///
 /// Files are only kept when [`OutputDir::commit`] is called; dropping an uncommitted
@@ -27,6 +77,8 @@ pub struct OutputDir {
     dir: PathBuf,
     created: bool,
     written: Vec<PathBuf>,
+    /// Subfolders this run created, innermost last.
+    subdirs: Vec<PathBuf>,
     committed: bool,
 }
 
@@ -46,6 +98,7 @@ impl OutputDir {
             dir: dir.to_path_buf(),
             created,
             written: Vec::new(),
+            subdirs: Vec::new(),
             committed: false,
         })
     }
@@ -55,9 +108,19 @@ impl OutputDir {
         &self.dir
     }
 
-    /// Write `name` atomically (temporary file + rename) and remember it.
+    /// Write `name` (which may name a subfolder, `figures/a.svg`) atomically (temporary file
+    /// + rename) and remember it.
     pub fn write(&mut self, name: &str, bytes: &[u8]) -> Result<PathBuf, OutputError> {
         let path = self.dir.join(name);
+        if let Some(parent) = path.parent() {
+            if !parent.exists() {
+                fs::create_dir_all(parent).map_err(|source| OutputError::Io {
+                    path: parent.to_path_buf(),
+                    source,
+                })?;
+                self.subdirs.push(parent.to_path_buf());
+            }
+        }
         write_atomic(&path, bytes)?;
         self.written.push(path.clone());
         Ok(path)
@@ -77,6 +140,9 @@ impl Drop for OutputDir {
         }
         for path in &self.written {
             let _ = fs::remove_file(path);
+        }
+        for dir in self.subdirs.iter().rev() {
+            let _ = fs::remove_dir(dir);
         }
         if self.created {
             let _ = fs::remove_dir(&self.dir);

@@ -3,7 +3,7 @@
 //!
 //! - Runtime parameters: [`Vehicle8`], [`Vehicle7`], [`Segway7`], [`Lorenz`], [`HenonHeiles`]
 //!   (`new(values)`, `with_defaults()`, consts `NX`, `NU`, `NP`, `NS`, `PARAMS`, `DEFAULTS`).
-//! - Parameters folded as constants: [`baked`] (the vehicles from `vehicles/paper.toml`,
+//! - Parameters folded as constants: `baked` (feature `baked`; the vehicles from `vehicles/paper.toml`,
 //!   `segway7` from `vehicles/segway.toml`, the explicit models from their IR defaults). Editing
 //!   one of those TOML files (or an IR file) and running `cargo build` rebuilds this crate with
 //!   the new constants: the macro `include_bytes!`es every file it reads.
@@ -16,7 +16,9 @@ twv_macros::twv_model!(ir = "ir/segway7.json", name = Segway7);
 twv_macros::twv_model!(ir = "ir/lorenz.json", name = Lorenz);
 twv_macros::twv_model!(ir = "ir/henon_heiles.json", name = HenonHeiles);
 
-/// The shipped models with their parameters folded as compile-time constants.
+/// The shipped models with their parameters folded as compile-time constants (feature
+/// `baked`).
+#[cfg(feature = "baked")]
 pub mod baked {
     twv_macros::twv_model!(
         ir = "ir/vehicle8.json",

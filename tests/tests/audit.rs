@@ -4,9 +4,10 @@
 
 use std::path::PathBuf;
 
+use twv_analysis::api::audit_model;
 use twv_analysis::audit::{audit, AuditReport, AuditSettings};
-use twv_analysis::cli::audit::audit_model;
 use twv_analysis::hand_model::{HandSegway7, HandVehicle7, HandVehicle8, Mistake, VehicleParams};
+use twv_analysis::model::{ModelSpec, ParamSource};
 
 fn vehicle_file(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -25,7 +26,11 @@ fn settings() -> AuditSettings {
 fn every_vehicle_passes_with_both_parameter_files() {
     for file in ["paper.toml", "segway.toml"] {
         for model in ["vehicle8", "vehicle7", "segway7"] {
-            let report = audit_model(model, Some(&vehicle_file(file)), &settings()).unwrap();
+            let resolved = ModelSpec::shipped(model)
+                .with_params(ParamSource::File(vehicle_file(file)))
+                .resolve()
+                .unwrap();
+            let report = audit_model(&resolved, &settings()).unwrap();
             assert!(report.passed, "{model} with {file}:\n{}", report.table());
             let worst = report
                 .quantities
@@ -40,13 +45,10 @@ fn every_vehicle_passes_with_both_parameter_files() {
 }
 
 fn paper() -> VehicleParams {
-    let loaded = twv_analysis::cli::model::ModelArgs {
-        model: Some("vehicle8".into()),
-        ir: None,
-        params: Some(vehicle_file("paper.toml")),
-    }
-    .load()
-    .unwrap();
+    let loaded = ModelSpec::shipped("vehicle8")
+        .with_params(ParamSource::File(vehicle_file("paper.toml")))
+        .resolve()
+        .unwrap();
     let value = |n: &str| loaded.param(n).unwrap();
     VehicleParams {
         m1: value("m1"),
@@ -141,7 +143,7 @@ fn flipped_gravity_sign_fails_naming_the_pitch_equation() {
         let upright = report
             .physics
             .iter()
-            .find(|c| c.name == "upright eigenvalues ±λ")
+            .find(|c| c.name == "upright eigenvalues ±√λ²")
             .unwrap();
         assert!(
             !upright.passed,
@@ -153,13 +155,14 @@ fn flipped_gravity_sign_fails_naming_the_pitch_equation() {
 #[test]
 fn audit_output_is_deterministic_for_a_seed() {
     let s = settings();
-    let a = audit_model("segway7", None, &s).unwrap();
-    let b = audit_model("segway7", None, &s).unwrap();
+    let segway = ModelSpec::shipped("segway7").resolve().unwrap();
+    let a = audit_model(&segway, &s).unwrap();
+    let b = audit_model(&segway, &s).unwrap();
     assert_eq!(
         serde_json::to_string(&a).unwrap(),
         serde_json::to_string(&b).unwrap()
     );
-    let other = audit_model("segway7", None, &AuditSettings { seed: 7, ..s }).unwrap();
+    let other = audit_model(&segway, &AuditSettings { seed: 7, ..s }).unwrap();
     assert_ne!(
         serde_json::to_string(&a).unwrap(),
         serde_json::to_string(&other).unwrap()

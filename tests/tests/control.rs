@@ -12,6 +12,7 @@ use twv_analysis::control::{
 use twv_analysis::integrate::VectorField;
 use twv_analysis::linear::{eigenvalues, CartPendulum, PidGains};
 use twv_analysis::lyapunov::{lyapunov_spectrum, IntegratorChoice, LyapunovSettings};
+use twv_analysis::progress::Silent;
 use twv_generated::{Segway7, Vehicle8};
 use twv_model::{Model, ModelInfo};
 
@@ -63,7 +64,7 @@ fn study_pd_recovers_vehicle8_from_forward_and_backward_tilts_and_drifts() {
     let idx = |n: &str| states.iter().position(|s| *s == n).unwrap();
     for phi0 in [0.1, -0.1, 0.2, -0.2] {
         let x0 = scenario::tilted::<8>(states, phi0).unwrap();
-        let run = run_closed_loop(&field, &x0, &run5()).unwrap();
+        let run = run_closed_loop(&field, &x0, &run5(), &Silent).unwrap();
         let m = &run.metrics;
         let last = run.trajectory.last();
         println!(
@@ -341,7 +342,7 @@ fn anti_windup_keeps_the_integral_bounded_under_saturation() {
             ..ControllerSettings::default()
         };
         let field = PidLoop::<_, 8, 2, 9>::new(&model, &settings, plant8(&model)).unwrap();
-        let r = run_closed_loop(&field, &x0, &run).unwrap();
+        let r = run_closed_loop(&field, &x0, &run, &Silent).unwrap();
         let zmax = r
             .trajectory
             .component(8)
@@ -430,7 +431,7 @@ fn segway7_wheel_torques_realise_the_force() {
     let settings = ControllerSettings::default();
     let field = PidLoop::<_, 7, 2, 7>::new(&model, &settings, plant).unwrap();
     let x0 = scenario::tilted::<7>(model.info().states, 0.1).unwrap();
-    let run = run_closed_loop(&field, &x0, &run5()).unwrap();
+    let run = run_closed_loop(&field, &x0, &run5(), &Silent).unwrap();
     for c in &run.commands {
         assert_eq!(c.u[0], c.u[1]);
         assert!((c.u[0] - c.force * r / 2.0).abs() <= 1e-12 * c.force.abs().max(1.0));
@@ -465,7 +466,7 @@ fn maneuver_tracks_the_velocity_reference_and_stops() {
         t_end,
         ..RunSettings::default()
     };
-    let r = run_closed_loop(&field, &[0.0; 8], &run).unwrap();
+    let r = run_closed_loop(&field, &[0.0; 8], &run, &Silent).unwrap();
     let v = r.trajectory.component(5);
     let cruise_end = r.trajectory.t.iter().position(|t| *t >= 9.0).unwrap();
     println!(
@@ -506,7 +507,7 @@ fn lean_limit_carries_a_saturating_velocity_step() {
     };
     let free = step(None);
     let field = PidLoop::<_, 8, 2, 9>::new(&model, &free, plant8(&model)).unwrap();
-    let r = run_closed_loop(&field, &[0.0; 8], &run).unwrap();
+    let r = run_closed_loop(&field, &[0.0; 8], &run, &Silent).unwrap();
     assert!(
         matches!(r.trajectory.end, RunEnd::Fell { .. }),
         "without a lean limit the step should end in a fall: {:?}",
@@ -515,7 +516,7 @@ fn lean_limit_carries_a_saturating_velocity_step() {
 
     let limited = step(Some(0.05));
     let field = PidLoop::<_, 8, 2, 9>::new(&model, &limited, plant8(&model)).unwrap();
-    let r = run_closed_loop(&field, &[0.0; 8], &run).unwrap();
+    let r = run_closed_loop(&field, &[0.0; 8], &run, &Silent).unwrap();
     assert_eq!(r.trajectory.end, RunEnd::Completed);
     let v_final = r.metrics.final_v_x.unwrap();
     println!("lean-limited 3 m/s step: final v_x {v_final:.4} m/s");

@@ -527,3 +527,52 @@ fn bad_tuner_input_is_a_typed_error() {
         Err(TuneError::Option { .. })
     ));
 }
+
+/// Every disk margin the loop can reach is found with gains of the order the spec needs, and
+/// the status, the certificate and its `meets_spec` agree (a 60° spec once came back
+/// "infeasible" with a certificate of 89° and gains of 2·10⁵). The minimum-gain objective keeps
+/// the margin constraint active.
+#[test]
+fn reachable_disk_margins_are_solved_with_small_gains() {
+    let lp = pitch_loop();
+    for spec in [
+        "dpm>=30",
+        "dpm>=45",
+        "dpm>=60",
+        "dpm>=70",
+        "dpm>=75",
+        "dgm>=6dB",
+        "dgm>=10dB",
+        "dgm>=14dB",
+        "dgm>=20dB",
+        "dpm>=60,dgm>=6dB",
+    ] {
+        let s: Spec = spec.parse().unwrap();
+        let res = tune(&lp, &s, &TuneOptions::default()).unwrap();
+        let cert = res.certificate.as_ref().expect("a certificate");
+        println!(
+            "{spec}: {:?} after {}, Kp = {:.1}, Kd = {:.1}, dpm {:.2}, dgm {:.3}",
+            res.status,
+            res.iterations,
+            cert.gains.kp,
+            cert.gains.kd,
+            cert.analysis.margins.disk.phase_deg,
+            cert.analysis.margins.disk.gain_high
+        );
+        assert_eq!(res.status, TuneStatus::Solved, "{spec}");
+        assert!(cert.meets_spec, "{spec}");
+        // Active constraint: the margin is met, not exceeded by much.
+        let m = &cert.analysis.margins.disk;
+        let slack = s.requirements.iter().map(|r| match *r {
+            twv_analysis::tune::Requirement::DiskPhase { deg } => m.phase_deg / deg - 1.0,
+            twv_analysis::tune::Requirement::DiskGain { factor } => m.gain_high / factor - 1.0,
+            _ => 0.0,
+        });
+        assert!(slack.fold(f64::INFINITY, f64::min) < 0.02, "{spec}: {m:?}");
+        assert!(
+            cert.gains.kp < 5e4 && cert.gains.kd < 2e4,
+            "{spec}: {:?}",
+            cert.gains
+        );
+    }
+}

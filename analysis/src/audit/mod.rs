@@ -11,7 +11,7 @@ mod sampling;
 mod simulation;
 
 pub use compare::{compare, EntryError, QuantityError};
-pub use physics::{upright_lambda, PhysicsCheck};
+pub use physics::{upright_lambda_squared, PhysicsCheck};
 pub use report::AuditReport;
 pub use sampling::{samples, Sample};
 
@@ -70,9 +70,9 @@ where
         settings.seed,
     );
     let quantities = compare(&audited, reference, &pts);
-    let lambda = upright_lambda(params, rolling_wheels);
+    let lambda_squared = upright_lambda_squared(params, rolling_wheels);
     let mut checks = Vec::new();
-    checks.extend(physics::equilibrium_eigenvalues(&audited, lambda));
+    checks.extend(physics::equilibrium_eigenvalues(&audited, lambda_squared));
     checks.push(physics::gyroscopic_no_work(&audited, &pts));
     checks.push(physics::energy_balance(&audited, &pts));
     checks.push(physics::height_independence(

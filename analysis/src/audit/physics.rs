@@ -34,16 +34,16 @@ impl PhysicsCheck {
     }
 }
 
-/// The pitch constants of the formula λ² = m_p g l M_x / (I_p M_x − m_p² l²).
-pub fn upright_lambda(p: &VehicleParams, rolling_wheels: bool) -> f64 {
+/// λ² = m_p g l M_x / (I_p M_x − m_p² l²) of the upright: positive for a pendulum above its
+/// hinge (l > 0: eigenvalues ±λ), negative below it (l < 0: ±i√−λ²).
+pub fn upright_lambda_squared(p: &VehicleParams, rolling_wheels: bool) -> f64 {
     let mx = if rolling_wheels {
         p.m2 + 2.0 * p.m_w + 2.0 * p.j_a / (p.r * p.r)
     } else {
         p.m1 + p.m2
     };
     let ip = p.i2[1] + p.m2 * p.b * p.b;
-    let lam2 = p.m2 * p.g * p.b * mx / (ip * mx - p.m2 * p.m2 * p.b * p.b);
-    lam2.sqrt()
+    p.m2 * p.g * p.b * mx / (ip * mx - p.m2 * p.m2 * p.b * p.b)
 }
 
 fn eigenvalues<const NX: usize>(jac: &[[f64; NX]; NX]) -> Vec<(f64, f64)> {
@@ -55,40 +55,55 @@ fn eigenvalues<const NX: usize>(jac: &[[f64; NX]; NX]) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Upright: eigenvalues ±λ and zeros. Hanging (Φ = π): ±iλ and zeros.
+/// How far the non-zero eigenvalue pair of `eig` is from ±√s (s ≥ 0: real) or ±i√−s (s < 0:
+/// imaginary), relative to √|s| (at least 1e-3 /s), with what was found.
+fn pair_error(eig: &[(f64, f64)], s: f64) -> (f64, String) {
+    let mu = s.abs().sqrt();
+    let scale = mu.max(1e-3);
+    let max_re = eig.iter().fold(f64::NEG_INFINITY, |m, e| m.max(e.0));
+    let min_re = eig.iter().fold(f64::INFINITY, |m, e| m.min(e.0));
+    let max_im = eig.iter().fold(f64::NEG_INFINITY, |m, e| m.max(e.1));
+    let max_abs_re = eig.iter().fold(0.0_f64, |m, e| m.max(e.0.abs()));
+    if s >= 0.0 {
+        let err = (max_re - mu).abs().max((min_re + mu).abs()) / scale;
+        (
+            err,
+            format!("expected ±{mu:.12}; largest real part {max_re:.12}, smallest {min_re:.12}"),
+        )
+    } else {
+        let err = ((max_im - mu).abs() + max_abs_re) / scale;
+        (
+            err,
+            format!("expected ±{mu:.12}i; largest imaginary part {max_im:.12}, largest |real| {max_abs_re:.1e}"),
+        )
+    }
+}
+
+/// The rest states' eigenvalues against λ² (see [`upright_lambda_squared`]): upright ±√λ²,
+/// hanging (Φ = π) ±√−λ², with zeros besides (real for the sign that is positive, imaginary
+/// for the other).
 pub fn equilibrium_eigenvalues<const NX: usize, const NU: usize, const NS: usize, M>(
     model: &M,
-    lambda: f64,
+    lambda_squared: f64,
 ) -> [PhysicsCheck; 2]
 where
     M: Mechanical<NX, NU, NS>,
 {
     let mut jac = [[0.0; NX]; NX];
     model.jac_x(&[0.0; NX], &[0.0; NU], &mut jac);
-    let up = eigenvalues(&jac);
-    let max_re = up.iter().fold(f64::NEG_INFINITY, |m, e| m.max(e.0));
-    let min_re = up.iter().fold(f64::INFINITY, |m, e| m.min(e.0));
-    let up_err = ((max_re - lambda).abs()).max((min_re + lambda).abs()) / lambda;
+    let (up_err, up_detail) = pair_error(&eigenvalues(&jac), lambda_squared);
     let mut hanging = [0.0; NX];
     hanging[0] = std::f64::consts::PI;
     model.jac_x(&hanging, &[0.0; NU], &mut jac);
-    let down = eigenvalues(&jac);
-    let max_im = down.iter().fold(f64::NEG_INFINITY, |m, e| m.max(e.1));
-    let max_re_down = down.iter().fold(0.0_f64, |m, e| m.max(e.0.abs()));
-    let down_err = ((max_im - lambda).abs() + max_re_down) / lambda;
+    let (down_err, down_detail) = pair_error(&eigenvalues(&jac), -lambda_squared);
     [
         PhysicsCheck::new(
-            "upright eigenvalues ±λ",
+            "upright eigenvalues ±√λ²",
             up_err,
             1e-9,
-            format!("λ = {lambda:.12} 1/s; largest {max_re:.12}, smallest {min_re:.12}"),
+            format!("λ² = {lambda_squared:.12} 1/s²; {up_detail}"),
         ),
-        PhysicsCheck::new(
-            "hanging eigenvalues ±iλ",
-            down_err,
-            1e-9,
-            format!("largest imaginary part {max_im:.12}, largest |real| {max_re_down:.1e}"),
-        ),
+        PhysicsCheck::new("hanging eigenvalues ±√−λ²", down_err, 1e-9, down_detail),
     ]
 }
 

@@ -72,6 +72,9 @@ pub enum ControlError {
     /// An initial state or time span that cannot be run.
     #[error("invalid run: {0}")]
     InvalidRun(String),
+    /// The caller cancelled the run.
+    #[error("interrupted")]
+    Interrupted,
     /// The integration failed (blow-up, step-size underflow …): the message names time and state.
     #[error(transparent)]
     Integrate(#[from] IntegrateError),

@@ -27,6 +27,7 @@
 
 mod error;
 mod field;
+mod loop_states;
 mod metrics;
 mod plant;
 mod record;
@@ -37,6 +38,7 @@ mod simulate;
 
 pub use error::ControlError;
 pub use field::{Command, Layout, PidLoop};
+pub use loop_states::loop_states;
 pub use metrics::{response_metrics, LoopMetrics, ResponseMetrics};
 pub use plant::{InputMap, Measured, Plant};
 pub use record::{loop_metrics, run_closed_loop, ClosedLoopRun};

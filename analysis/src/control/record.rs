@@ -6,6 +6,7 @@ use super::error::ControlError;
 use super::field::{Command, PidLoop};
 use super::metrics::{response_metrics, LoopMetrics};
 use super::simulate::{simulate, RunSettings, Trajectory};
+use crate::progress::Progress;
 
 /// A closed-loop run: the augmented trajectory, the commands at the samples, the metrics.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,12 +25,13 @@ pub fn run_closed_loop<M, const NX: usize, const NU: usize, const NA: usize>(
     field: &PidLoop<'_, M, NX, NU, NA>,
     x0: &[f64; NX],
     run: &RunSettings,
+    progress: &dyn Progress,
 ) -> Result<ClosedLoopRun<NA, NU>, ControlError>
 where
     M: Model<NX, NU>,
 {
     let xa0 = field.initial_state(x0);
-    let trajectory = simulate(field, &xa0, field.plant().measured.phi, run)?;
+    let trajectory = simulate(field, &xa0, field.plant().measured.phi, run, progress)?;
     let commands: Vec<Command<NU>> = trajectory
         .t
         .iter()

@@ -6,6 +6,7 @@ use serde::Serialize;
 use super::error::ControlError;
 use crate::integrate::{Dopri5, Rk4, Stepper, VectorField};
 use crate::lyapunov::IntegratorChoice;
+use crate::progress::Progress;
 
 /// The most samples one run may record (t_end / sample interval).
 pub const MAX_SAMPLES: f64 = 2e6;
@@ -63,6 +64,27 @@ impl RunSettings {
         if let Some(a) = self.fall_angle {
             check("fall angle [rad]", a, a > 0.0, "must be > 0")?;
         }
+        // The same rules as the Lyapunov settings: a step within the interval it samples, and
+        // no more steps than any run may take.
+        match &self.integrator {
+            IntegratorChoice::Rk4 { h } => {
+                check("h (RK4 step) [s]", *h, *h > 0.0, "must be finite and > 0")?;
+                check(
+                    "h (RK4 step) [s]",
+                    *h,
+                    *h <= self.sample,
+                    "must be ≤ the sample interval",
+                )?;
+                let steps = self.t_end / h;
+                check(
+                    "t_end / h (number of RK4 steps)",
+                    steps,
+                    steps <= crate::integrate::MAX_STEPS as f64,
+                    "must be ≤ 1e9: raise h or shorten the run",
+                )?;
+            }
+            IntegratorChoice::Dopri(o) => o.validate()?,
+        }
         Ok(())
     }
 }
@@ -112,6 +134,7 @@ pub fn simulate<F, const N: usize>(
     x0: &[f64; N],
     phi: usize,
     run: &RunSettings,
+    progress: &dyn Progress,
 ) -> Result<Trajectory<N>, ControlError>
 where
     F: VectorField<N>,
@@ -123,10 +146,15 @@ where
         )));
     }
     match run.integrator {
-        IntegratorChoice::Rk4 { h } => sample(Rk4::new(field, 0.0, *x0, [], h, false)?, phi, run),
-        IntegratorChoice::Dopri(opts) => {
-            sample(Dopri5::new(field, 0.0, *x0, [], opts, false)?, phi, run)
+        IntegratorChoice::Rk4 { h } => {
+            sample(Rk4::new(field, 0.0, *x0, [], h, false)?, phi, run, progress)
         }
+        IntegratorChoice::Dopri(opts) => sample(
+            Dopri5::new(field, 0.0, *x0, [], opts, false)?,
+            phi,
+            run,
+            progress,
+        ),
     }
 }
 
@@ -134,9 +162,13 @@ fn sample<S: Stepper<N, 0>, const N: usize>(
     mut stepper: S,
     phi: usize,
     run: &RunSettings,
+    progress: &dyn Progress,
 ) -> Result<Trajectory<N>, ControlError> {
     // Sample i at i·Δ (not an accumulated sum), the last exactly at t_end.
     let n = (run.t_end / run.sample * (1.0 - 1e-12)).ceil() as usize;
+    progress.start(n as u64, "samples");
+    // Progress in about 200 steps, however many samples.
+    let every = (n / 200).max(1);
     let mut traj = Trajectory {
         t: Vec::with_capacity(n + 1),
         x: Vec::with_capacity(n + 1),
@@ -151,6 +183,12 @@ fn sample<S: Stepper<N, 0>, const N: usize>(
             i as f64 * run.sample
         };
         stepper.advance_to(t)?;
+        if i % every == 0 {
+            progress.advance(every as u64);
+            if progress.cancelled() {
+                return Err(ControlError::Interrupted);
+            }
+        }
         let x = stepper.state().x;
         traj.t.push(t);
         traj.x.push(x);

@@ -6,6 +6,7 @@
 //! binary dispatches to share one copy of it.
 
 use crate::integrate::{Dopri5, Rk4, Stepper, VectorField};
+use crate::progress::{Progress, Silent};
 
 use super::classify::{classify, SignRule};
 use super::result::{LyapunovResult, RunDetails, RunningEstimates};
@@ -29,17 +30,33 @@ pub fn lyapunov_spectrum<F, const N: usize, const K: usize>(
 where
     F: VectorField<N>,
 {
+    lyapunov_spectrum_observed::<F, N, K>(field, x0, settings, &Silent)
+}
+
+/// [`lyapunov_spectrum`] reporting each interval to `progress`, and stopping with
+/// [`LyapunovError::Interrupted`] when it is cancelled.
+pub fn lyapunov_spectrum_observed<F, const N: usize, const K: usize>(
+    field: F,
+    x0: &[f64; N],
+    settings: &LyapunovSettings,
+    progress: &dyn Progress,
+) -> Result<LyapunovResult, LyapunovError>
+where
+    F: VectorField<N>,
+{
     settings.validate()?;
     check_count::<N, K>()?;
     let w0 = initial_basis::<N, K>(&settings.basis);
     let trace = settings.trace_check;
     match settings.integrator {
         IntegratorChoice::Rk4 { h } => {
-            lyapunov_spectrum_with(Rk4::new(field, 0.0, *x0, w0, h, trace)?, settings)
+            run(Rk4::new(field, 0.0, *x0, w0, h, trace)?, settings, progress)
         }
-        IntegratorChoice::Dopri(opts) => {
-            lyapunov_spectrum_with(Dopri5::new(field, 0.0, *x0, w0, opts, trace)?, settings)
-        }
+        IntegratorChoice::Dopri(opts) => run(
+            Dopri5::new(field, 0.0, *x0, w0, opts, trace)?,
+            settings,
+            progress,
+        ),
     }
 }
 
@@ -47,8 +64,19 @@ where
 /// `settings.integrator` and `settings.basis` are then ignored, and `mean_trace` is reported
 /// only if both `settings.trace_check` and the stepper's trace quadrature are on.
 pub fn lyapunov_spectrum_with<S, const N: usize, const K: usize>(
+    stepper: S,
+    settings: &LyapunovSettings,
+) -> Result<LyapunovResult, LyapunovError>
+where
+    S: Stepper<N, K>,
+{
+    run(stepper, settings, &Silent)
+}
+
+fn run<S, const N: usize, const K: usize>(
     mut stepper: S,
     settings: &LyapunovSettings,
+    progress: &dyn Progress,
 ) -> Result<LyapunovResult, LyapunovError>
 where
     S: Stepper<N, K>,
@@ -61,6 +89,15 @@ where
     // Transient: evolve state and basis, re-orthonormalise, forget the growth.
     let t_begin = stepper.t();
     let n_transient = (settings.transient / t_sample * (1.0 - 1e-12)).ceil() as usize;
+    progress.start((n_transient + settings.iterations) as u64, "intervals");
+    let interval_done = || {
+        progress.advance(1);
+        if progress.cancelled() {
+            Err(LyapunovError::Interrupted)
+        } else {
+            Ok(())
+        }
+    };
     for i in 1..=n_transient {
         let t_end = if i == n_transient {
             t_begin + settings.transient
@@ -69,6 +106,7 @@ where
         };
         stepper.advance_to(t_end)?;
         reorthonormalize(&mut stepper)?;
+        interval_done()?;
     }
 
     // Measurement: the log sums, the batch sums of the local exponents, and (decimated) the
@@ -108,6 +146,7 @@ where
                 batch_sums[b * K + k] += lr / dt;
             }
         }
+        interval_done()?;
         stepper.field().rhs(t, &y.x, &mut f);
         max_speed = max_speed.max(norm(&f));
         max_norm = max_norm.max(norm(&y.x));

@@ -67,6 +67,9 @@ pub enum LyapunovError {
         /// State dimension.
         n: usize,
     },
+    /// The caller cancelled the run.
+    #[error("interrupted")]
+    Interrupted,
     /// A tangent vector collapsed (R_kk = 0 or non-finite): the basis lost rank, e.g. through
     /// underflow over a too long interval at a strongly contracting direction.
     #[error("tangent basis degenerate at t = {t}: R[{index}][{index}] = {r}; shorten t_sample")]

@@ -31,7 +31,9 @@ mod settings;
 mod stats;
 
 pub use basis::initial_basis;
-pub use benettin::{lyapunov_spectrum, lyapunov_spectrum_with, MAX_RUNNING_ROWS};
+pub use benettin::{
+    lyapunov_spectrum, lyapunov_spectrum_observed, lyapunov_spectrum_with, MAX_RUNNING_ROWS,
+};
 pub use classify::{
     classify, verdict, Classification, ExponentSign, SignDecision, SignRule, SignTest,
 };

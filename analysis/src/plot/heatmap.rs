@@ -3,20 +3,27 @@
 
 use plotters::prelude::*;
 
-use super::PlotError;
+use super::{font, Area, DrawResult, LABEL_PX, TICK_PX, TITLE_PX};
 
 /// A heat map's data and labels. `values` and `boundary` are row-major over (`ys`, `xs`):
-/// entry `j·xs.len() + i` belongs to (xs[i], ys[j]). NaN values are drawn grey; the boundary is
-/// where `boundary` changes sign (NaN cells are skipped).
-pub struct HeatMap<'a> {
-    pub title: &'a str,
-    pub x_label: &'a str,
-    pub y_label: &'a str,
-    pub value_label: &'a str,
-    pub xs: &'a [f64],
-    pub ys: &'a [f64],
-    pub values: &'a [f64],
-    pub boundary: &'a [f64],
+/// entry `j·xs.len() + i` belongs to (xs[i], ys[j]). A cell without a value (NaN) is drawn in
+/// the colour of its `missing` label (`fell`, `blew up`, …), which the legend names; the
+/// boundary is where `boundary` changes sign (NaN cells are skipped).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeatMap {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub value_label: String,
+    pub xs: Vec<f64>,
+    pub ys: Vec<f64>,
+    pub values: Vec<f64>,
+    /// Why a cell has no value (`None` where it has one).
+    pub missing: Vec<Option<&'static str>>,
+    pub boundary: Vec<f64>,
+    /// A signed quantity whose sign means stable (< 0) or unstable (> 0): drawn on a diverging
+    /// scale centred on 0 (blue stable, red unstable); otherwise a sequential scale.
+    pub signed: bool,
     pub size: (u32, u32),
 }
 
@@ -73,8 +80,8 @@ pub fn zero_contour(xs: &[f64], ys: &[f64], field: &[f64]) -> Vec<Segment> {
     out
 }
 
-/// Viridis, by five stops.
-fn colour(t: f64) -> RGBColor {
+/// Viridis, by five stops: the sequential scale.
+fn viridis(t: f64) -> RGBColor {
     const STOPS: [(f64, f64, f64); 5] = [
         (68.0, 1.0, 84.0),
         (59.0, 82.0, 139.0),
@@ -82,12 +89,61 @@ fn colour(t: f64) -> RGBColor {
         (94.0, 201.0, 98.0),
         (253.0, 231.0, 37.0),
     ];
-    let s = t.clamp(0.0, 1.0) * (STOPS.len() - 1) as f64;
-    let k = (s.floor() as usize).min(STOPS.len() - 2);
+    ramp(&STOPS, t)
+}
+
+/// Blue (t = 0) through white (½) to red (1): the diverging scale (ColorBrewer RdBu).
+fn diverging(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] = [
+        (33.0, 102.0, 172.0),
+        (146.0, 197.0, 222.0),
+        (247.0, 247.0, 247.0),
+        (244.0, 165.0, 130.0),
+        (178.0, 24.0, 43.0),
+    ];
+    ramp(&STOPS, t)
+}
+
+fn ramp(stops: &[(f64, f64, f64); 5], t: f64) -> RGBColor {
+    let s = t.clamp(0.0, 1.0) * (stops.len() - 1) as f64;
+    let k = (s.floor() as usize).min(stops.len() - 2);
     let f = s - k as f64;
-    let (a, b) = (STOPS[k], STOPS[k + 1]);
+    let (a, b) = (stops[k], stops[k + 1]);
     let mix = |x: f64, y: f64| (x + f * (y - x)).round() as u8;
     RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// The colour scale of a map over [lo, hi]: diverging with 0 at its white centre (each side
+/// stretched to its own extreme, so both are visible), or sequential.
+struct Scale {
+    lo: f64,
+    hi: f64,
+    signed: bool,
+}
+
+impl Scale {
+    fn colour(&self, v: f64) -> RGBColor {
+        if self.signed {
+            let t = if v < 0.0 {
+                0.5 - 0.5 * (v / self.lo.min(-f64::MIN_POSITIVE)).min(1.0)
+            } else {
+                0.5 + 0.5 * (v / self.hi.max(f64::MIN_POSITIVE)).min(1.0)
+            };
+            diverging(t)
+        } else {
+            viridis((v - self.lo) / (self.hi - self.lo))
+        }
+    }
+}
+
+/// The colour of a cell without a value, by why.
+fn missing_colour(label: &str) -> RGBColor {
+    match label {
+        "fell" => RGBColor(64, 64, 64),
+        "blew up" => RGBColor(0, 0, 0),
+        "not settled" => RGBColor(170, 170, 170),
+        _ => RGBColor(215, 200, 225),
+    }
 }
 
 /// Half the distance to the neighbours of `v[i]` on each side (a cell around each grid value).
@@ -99,88 +155,135 @@ fn cell(v: &[f64], i: usize) -> (f64, f64) {
     (v[i] - lo, v[i] + hi)
 }
 
-/// The heat map as an SVG document: cells coloured by value (viridis, grey where NaN), the
-/// zero contour of `boundary` in black, and a colour bar.
-pub fn heat_map(h: &HeatMap) -> Result<String, PlotError> {
-    let err = |e: &dyn std::fmt::Display| PlotError {
-        title: h.title.to_string(),
-        message: e.to_string(),
-    };
-    let (nx, ny) = (h.xs.len(), h.ys.len());
-    if nx == 0 || ny == 0 || h.values.len() != nx * ny || h.boundary.len() != nx * ny {
-        return Err(err(&"grid and values differ in size"));
-    }
-    let finite = h.values.iter().copied().filter(|v| v.is_finite());
-    let (mut lo, mut hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-        (a.min(v), b.max(v))
-    });
-    if !lo.is_finite() {
-        (lo, hi) = (0.0, 1.0);
-    } else if hi <= lo {
-        (lo, hi) = (lo - 0.5, hi + 0.5);
-    }
-    let (x0, x1) = (cell(h.xs, 0).0, cell(h.xs, nx - 1).1);
-    let (y0, y1) = (cell(h.ys, 0).0, cell(h.ys, ny - 1).1);
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, h.size).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| err(&e))?;
-        let root = root
-            .titled(h.title, ("sans-serif", 18))
-            .map_err(|e| err(&e))?;
-        let (main, bar) = root.split_horizontally(h.size.0.saturating_sub(130));
+/// Width of the colour bar and legend column [px at 1×].
+const SIDE_W: u32 = 210;
+
+impl HeatMap {
+    /// Draws onto `area` (of this map's size times `k`): cells coloured by value, cells without
+    /// a value by why (named in the legend), the zero contour of `boundary` in black, and a
+    /// colour bar.
+    pub(crate) fn draw<DB: DrawingBackend>(&self, area: &Area<DB>, k: u32) -> DrawResult<DB> {
+        let h = self;
+        let (nx, ny) = (h.xs.len(), h.ys.len());
+        let n = nx * ny;
+        if nx == 0
+            || ny == 0
+            || h.values.len() != n
+            || h.boundary.len() != n
+            || h.missing.len() != n
+        {
+            return Err(DrawingAreaErrorKind::LayoutError);
+        }
+        let finite = h.values.iter().copied().filter(|v| v.is_finite());
+        let (mut lo, mut hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+        if !lo.is_finite() {
+            (lo, hi) = (0.0, 1.0);
+        } else if hi <= lo {
+            (lo, hi) = (lo - 0.5, hi + 0.5);
+        }
+        if h.signed {
+            (lo, hi) = (lo.min(0.0), hi.max(0.0));
+        }
+        let scale = Scale {
+            lo,
+            hi,
+            signed: h.signed,
+        };
+        let (x0, x1) = (cell(&h.xs, 0).0, cell(&h.xs, nx - 1).1);
+        let (y0, y1) = (cell(&h.ys, 0).0, cell(&h.ys, ny - 1).1);
+        let mut labels: Vec<&str> = h.missing.iter().flatten().copied().collect();
+        labels.sort_unstable();
+        labels.dedup();
+        let (width, height) = area.dim_in_pixel();
+        area.fill(&WHITE)?;
+        let root = area
+            .margin(6 * k, 0, 0, 0)
+            .titled(&h.title, font(TITLE_PX, k))?;
+        let (main, side) = root.split_horizontally(width.saturating_sub(SIDE_W * k));
         let mut ctx = ChartBuilder::on(&main)
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| err(&e))?;
+            .margin(8 * k)
+            .x_label_area_size(50 * k)
+            .y_label_area_size(80 * k)
+            .build_cartesian_2d(x0..x1, y0..y1)?;
         ctx.configure_mesh()
             .disable_mesh()
-            .x_desc(h.x_label)
-            .y_desc(h.y_label)
-            .draw()
-            .map_err(|e| err(&e))?;
-        let grey = RGBColor(190, 190, 190);
+            .x_desc(&h.x_label)
+            .y_desc(&h.y_label)
+            .label_style(font(TICK_PX, k))
+            .axis_desc_style(font(LABEL_PX, k))
+            .axis_style(BLACK.stroke_width(k))
+            .draw()?;
         let cells = (0..ny)
             .flat_map(|j| (0..nx).map(move |i| (i, j)))
             .map(|(i, j)| {
-                let v = h.values[j * nx + i];
-                let c = if v.is_finite() {
-                    colour((v - lo) / (hi - lo))
-                } else {
-                    grey
+                let idx = j * nx + i;
+                let v = h.values[idx];
+                let c = match h.missing[idx] {
+                    Some(label) => missing_colour(label),
+                    None if v.is_finite() => scale.colour(v),
+                    None => missing_colour(""),
                 };
-                let ((a, b), (c0, d)) = (cell(h.xs, i), cell(h.ys, j));
+                let ((a, b), (c0, d)) = (cell(&h.xs, i), cell(&h.ys, j));
                 Rectangle::new([(a, c0), (b, d)], c.filled())
             });
-        ctx.draw_series(cells).map_err(|e| err(&e))?;
-        let lines = zero_contour(h.xs, h.ys, h.boundary)
+        ctx.draw_series(cells)?;
+        let lines = zero_contour(&h.xs, &h.ys, &h.boundary)
             .into_iter()
-            .map(|[p, q]| PathElement::new(vec![p, q], BLACK.stroke_width(2)));
-        ctx.draw_series(lines).map_err(|e| err(&e))?;
+            .map(|[p, q]| PathElement::new(vec![p, q], BLACK.stroke_width(3 * k)));
+        ctx.draw_series(lines)?;
 
+        // The colour bar above the legend of the cells without a value.
+        let legend_h = (LABEL_PX + 10) * k * (labels.len() as u32 + 1);
+        let (bar, legend) = side.split_vertically(height.saturating_sub(60 * k + legend_h));
         let mut cb = ChartBuilder::on(&bar)
-            .margin(12)
-            .margin_left(4)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d(0.0..1.0, lo..hi)
-            .map_err(|e| err(&e))?;
+            .margin(8 * k)
+            .margin_left(4 * k)
+            .x_label_area_size(10 * k)
+            .y_label_area_size(90 * k)
+            .build_cartesian_2d(0.0..1.0, lo..hi)?;
         cb.configure_mesh()
             .disable_mesh()
             .disable_x_axis()
-            .y_desc(h.value_label)
-            .draw()
-            .map_err(|e| err(&e))?;
-        let n = 64;
-        let steps = (0..n).map(|k| {
-            let (a, b) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
+            .y_desc(&h.value_label)
+            .label_style(font(TICK_PX, k))
+            .axis_desc_style(font(TICK_PX, k))
+            .axis_style(BLACK.stroke_width(k))
+            .draw()?;
+        let steps = 128;
+        let strips = (0..steps).map(|i| {
+            let (a, b) = (i as f64 / steps as f64, (i + 1) as f64 / steps as f64);
             let (va, vb) = (lo + a * (hi - lo), lo + b * (hi - lo));
-            Rectangle::new([(0.0, va), (1.0, vb)], colour((a + b) / 2.0).filled())
+            Rectangle::new(
+                [(0.0, va), (1.0, vb)],
+                scale.colour(0.5 * (va + vb)).filled(),
+            )
         });
-        cb.draw_series(steps).map_err(|e| err(&e))?;
-        root.present().map_err(|e| err(&e))?;
+        cb.draw_series(strips)?;
+        let row = ((LABEL_PX + 10) * k) as i32;
+        let mut y = (10 * k) as i32;
+        let entries = labels
+            .iter()
+            .map(|l| (Some(missing_colour(l)), l.to_string()))
+            .chain(std::iter::once((None, "stability boundary".to_string())));
+        for (colour, text) in entries {
+            let x = (12 * k) as i32;
+            let s = (LABEL_PX * k) as i32;
+            match colour {
+                Some(c) => legend.draw(&Rectangle::new([(x, y), (x + s, y + s)], c.filled()))?,
+                None => legend.draw(&PathElement::new(
+                    vec![(x, y + s / 2), (x + s, y + s / 2)],
+                    BLACK.stroke_width(3 * k),
+                ))?,
+            }
+            legend.draw(&Text::new(
+                text,
+                (x + s + (6 * k) as i32, y),
+                font(LABEL_PX, k),
+            ))?;
+            y += row;
+        }
+        Ok(())
     }
-    Ok(svg)
 }

@@ -1,24 +1,22 @@
-//! Figures as SVG (plotters' SVG backend: text stays text, no font files needed), so every
-//! result a person opens is a plain file a browser shows and the HTML report can inline.
+//! Figures: each one a value ([`Figure`]) that draws itself with plotters on any backend, so
+//! the same drawing gives the SVG (text stays text; the HTML report inlines it) and the PNG
+//! beside it (plotters' bitmap backend, glyphs by ab_glyph, encoded by the png crate).
+//!
+//! Every text is at least 13 px at the size a figure declares; the SVG is drawn at
+//! [`SUPERSAMPLE`] times that size and scaled back by its viewBox, because plotters places
+//! everything on whole pixels (at 1× lines look stepped).
 
+mod grid;
 mod heatmap;
-pub use heatmap::{heat_map, zero_contour, HeatMap, Segment};
+mod line;
+mod render;
 
+pub use grid::Grid;
+pub use heatmap::{zero_contour, HeatMap, Segment};
+pub use line::{Curve, LineChart};
+
+use plotters::coord::Shift;
 use plotters::prelude::*;
-
-/// One named curve.
-pub struct Series<'a> {
-    pub name: String,
-    pub points: &'a [(f64, f64)],
-}
-
-/// A chart's labels and size in pixels.
-pub struct Chart<'a> {
-    pub title: &'a str,
-    pub x_label: &'a str,
-    pub y_label: &'a str,
-    pub size: (u32, u32),
-}
 
 /// Why a figure could not be drawn.
 #[derive(Debug, thiserror::Error)]
@@ -28,7 +26,82 @@ pub struct PlotError {
     pub message: String,
 }
 
-fn bounds<'a>(series: impl Iterator<Item = &'a (f64, f64)>) -> ((f64, f64), (f64, f64)) {
+/// The SVG is drawn at this multiple of its declared size.
+pub const SUPERSAMPLE: u32 = 4;
+
+/// The PNG is this multiple of the declared size (sharp on high-density screens and in print).
+pub const PNG_SCALE: u32 = 2;
+
+/// Font sizes at the declared (1×) size, as plotters takes them: it draws text at 1/1.24 of
+/// the size given, so these are 16, 13 and 11.3 px tall glyph boxes — at least 10 px even when
+/// the report scales a figure to 90 % to fit the page.
+pub(crate) const TITLE_PX: u32 = 20;
+pub(crate) const LABEL_PX: u32 = 16;
+pub(crate) const TICK_PX: u32 = 14;
+
+/// A font of `px` (at 1×) on a canvas drawn at `k` ×.
+pub(crate) fn font(px: u32, k: u32) -> (&'static str, u32) {
+    ("sans-serif", px * k)
+}
+
+/// A drawing area of any backend.
+pub(crate) type Area<'a, DB> = DrawingArea<DB, Shift>;
+
+/// A drawing error of any backend.
+pub(crate) type DrawResult<DB> =
+    Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+
+/// Any figure twv draws.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Figure {
+    /// Curves against one x axis.
+    Line(LineChart),
+    /// A heat map over a grid with its stability boundary.
+    Heat(HeatMap),
+    /// Several line charts side by side.
+    Grid(Grid),
+}
+
+impl Figure {
+    /// Its title (for errors).
+    pub fn title(&self) -> &str {
+        match self {
+            Figure::Line(f) => &f.title,
+            Figure::Heat(f) => &f.title,
+            Figure::Grid(f) => f.title(),
+        }
+    }
+
+    /// The declared size [px].
+    pub fn size(&self) -> (u32, u32) {
+        match self {
+            Figure::Line(f) => f.size,
+            Figure::Heat(f) => f.size,
+            Figure::Grid(f) => f.size(),
+        }
+    }
+
+    /// Draws onto `area` at `k` × the declared size.
+    pub(crate) fn draw<DB: DrawingBackend>(&self, area: &Area<DB>, k: u32) -> DrawResult<DB> {
+        match self {
+            Figure::Line(f) => f.draw(area, k),
+            Figure::Heat(f) => f.draw(area, k),
+            Figure::Grid(f) => f.draw(area, k),
+        }
+    }
+
+    /// The figure as an SVG document.
+    pub fn svg(&self) -> Result<String, PlotError> {
+        render::svg(self)
+    }
+
+    /// The figure as a PNG image at [`PNG_SCALE`] × its declared size.
+    pub fn png(&self) -> Result<Vec<u8>, PlotError> {
+        render::png(self)
+    }
+}
+
+pub(crate) fn bounds<'a>(series: impl Iterator<Item = &'a (f64, f64)>) -> ((f64, f64), (f64, f64)) {
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
@@ -52,7 +125,7 @@ fn bounds<'a>(series: impl Iterator<Item = &'a (f64, f64)>) -> ((f64, f64), (f64
 }
 
 /// Palette that stays readable for up to ten curves.
-const COLORS: [RGBColor; 10] = [
+pub(crate) const COLORS: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -64,52 +137,3 @@ const COLORS: [RGBColor; 10] = [
     RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
 ];
-
-/// A line chart of several series as an SVG document.
-pub fn line_chart(chart: &Chart, series: &[Series]) -> Result<String, PlotError> {
-    let err = |e: &dyn std::fmt::Display| PlotError {
-        title: chart.title.to_string(),
-        message: e.to_string(),
-    };
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, chart.size).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| err(&e))?;
-        let ((x0, x1), (y0, y1)) = bounds(series.iter().flat_map(|s| s.points.iter()));
-        let mut ctx = ChartBuilder::on(&root)
-            .caption(chart.title, ("sans-serif", 18))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| err(&e))?;
-        ctx.configure_mesh()
-            .x_desc(chart.x_label)
-            .y_desc(chart.y_label)
-            .draw()
-            .map_err(|e| err(&e))?;
-        for (i, s) in series.iter().enumerate() {
-            let color = COLORS[i % COLORS.len()];
-            let pts = s
-                .points
-                .iter()
-                .copied()
-                .filter(|(x, y)| x.is_finite() && y.is_finite());
-            ctx.draw_series(LineSeries::new(pts, color.stroke_width(2)))
-                .map_err(|e| err(&e))?
-                .label(s.name.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
-                });
-        }
-        if series.len() > 1 {
-            ctx.configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
-                .map_err(|e| err(&e))?;
-        }
-        root.present().map_err(|e| err(&e))?;
-    }
-    Ok(svg)
-}

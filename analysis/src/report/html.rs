@@ -9,10 +9,11 @@ pub fn escape(text: &str) -> String {
         .replace('>', "&gt;")
 }
 
-/// A figure: its file name beside the page, its SVG and its size in pixels.
+/// A figure: its file name beside the page, its SVG (inlined) and PNG, and its caption.
 pub struct Figure {
     pub file: String,
     pub svg: String,
+    pub png: Vec<u8>,
     pub caption: String,
 }
 
@@ -78,18 +79,68 @@ impl Page {
         let _ = writeln!(self.body, "</tbody></table>");
     }
 
-    /// The figure inline, with a link to its file.
+    /// The summary at the top: failed checks first (in a red box), then every check and finding
+    /// with its verdict.
+    pub fn summary(&mut self, checks: &[super::Check], findings: &[super::Finding]) {
+        let failed: Vec<&super::Check> = checks.iter().filter(|c| !c.passed).collect();
+        if !failed.is_empty() {
+            let _ = write!(
+                self.body,
+                "<div class=\"failed\"><strong>{} check(s) FAILED</strong> — the results below \
+                 rest on them:<ul>",
+                failed.len()
+            );
+            for c in &failed {
+                let _ = write!(
+                    self.body,
+                    "<li><strong>{}</strong>: {}</li>",
+                    escape(&c.name),
+                    escape(&c.detail)
+                );
+            }
+            let _ = writeln!(self.body, "</ul></div>");
+        }
+        let _ = write!(
+            self.body,
+            "<div class=\"summary\"><h2>Summary of findings</h2><ul>"
+        );
+        for c in checks {
+            let _ = write!(
+                self.body,
+                "<li class=\"{}\"><strong>check — {}: {}</strong>. {}</li>",
+                if c.passed { "pass" } else { "fail" },
+                escape(&c.name),
+                if c.passed { "passed" } else { "FAILED" },
+                escape(&c.detail)
+            );
+        }
+        for f in findings {
+            let _ = write!(
+                self.body,
+                "<li><strong>{}: {}</strong>. {}</li>",
+                escape(&f.topic),
+                escape(&f.verdict),
+                escape(&f.text)
+            );
+        }
+        let _ = writeln!(self.body, "</ul></div>");
+    }
+
+    /// The figure inline at its own size (never wider than the page), with links to its SVG
+    /// and PNG files.
     pub fn figure(&mut self, fig: &Figure) {
         let (w, h) = fig.size().unwrap_or((0, 0));
+        let png = format!("{}.png", fig.file.trim_end_matches(".svg"));
         let _ = writeln!(
             self.body,
-            "<figure data-file=\"{}\" data-width=\"{w}\" data-height=\"{h}\">{}<figcaption>{} \
-             (<a href=\"{}\">{}</a>)</figcaption></figure>",
+            "<figure data-file=\"{}\" data-width=\"{w}\" data-height=\"{h}\" \
+             style=\"max-width:{w}px\">{}<figcaption>{} (<a href=\"{}\">SVG</a>, \
+             <a href=\"{}\">PNG</a>)</figcaption></figure>",
             escape(&fig.file),
             fig.svg,
             escape(&fig.caption),
             escape(&fig.file),
-            escape(&fig.file)
+            escape(&png)
         );
     }
 
@@ -101,7 +152,9 @@ impl Page {
              table{{border-collapse:collapse;margin:0.5em 0}}td,th{{border:1px solid #bbb;padding:2px 8px;\
              font-size:0.9em;text-align:right}}th{{background:#eee}}pre{{background:#f6f6f6;padding:0.5em;\
              overflow-x:auto;font-size:0.85em}}figure{{margin:1em 0}}figcaption{{font-size:0.9em;color:#444}}\
-             svg{{max-width:100%;height:auto}}</style></head><body>\n{}</body></html>\n",
+             figure svg{{width:100%;height:auto}}.failed{{border:2px solid #c00;background:#fee;\
+             padding:0.5em 1em;margin:1em 0}}.summary{{background:#f4f8ff;padding:0.3em 1em;\
+             margin:1em 0}}li.fail{{color:#a00}}</style></head><body>\n{}</body></html>\n",
             escape(title),
             self.body
         )

@@ -1,131 +1,154 @@
-//! `twv report`: the study reproduced end to end from one command, and gone past — model and
-//! audit, open-loop Lyapunov spectrum and its horizon dependence, phase portraits, tilt
-//! recovery, linear analysis with tuned gains and LQR, a stability map, and an honest comparison
-//! with the study's claims. One self-contained HTML page plus the figures and data beside it.
+//! `twv report`: the study reproduced end to end, and gone past — model and audit, open-loop
+//! Lyapunov spectrum and its horizon dependence, phase portraits, tilt recovery, linear
+//! analysis with tuned gains and LQR, a stability map, and the study's claims checked.
 //!
-//! Every section runs the same code as the corresponding command: the report builds the
-//! command's arguments, parses them with the CLI's own parser and calls its `compute`.
+//! Every section calls the typed API ([`crate::api`]) with typed settings; every sentence that
+//! judges a result comes from [`findings`], computed from the results with a stated threshold.
+//! The page opens with those findings and with any failed check; [`Report::passed`] is what
+//! the binary's exit code follows. Nothing here writes files: [`Report::files`] are written by
+//! the caller.
 
+mod findings;
 mod html;
 mod sections;
 
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result};
-use clap::Parser;
-use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
 
+pub use findings::{
+    audit_check, equations_claim, hyperchaos_claim, linear_finding, map_finding, open_loop_finding,
+    pd_exponents_claim, recovery_claim, recovery_finding, trace_check, tune_finding, Check, Claim,
+    Finding, DRIFT_TOLERANCE, TRACE_TOLERANCE,
+};
 pub use html::{svg_size, Figure, Page};
 
-use crate::cli::{Cli, Command};
-use crate::output::OutputDir;
+use crate::api::{LinearReport, PhaseResult, Progress, SimResult, SpectrumResult, TuneReport};
+use crate::audit::{AuditReport, AuditSettings};
+use crate::error::Result;
+use crate::model::ParamSource;
+use crate::output::Files;
+use crate::sweep::PointResult;
 
-/// What to run.
-#[derive(Debug, Clone)]
+/// What to run. Defaults: the IR's parameters, full horizons.
+#[derive(Debug, Clone, PartialEq)]
 pub struct ReportSettings {
-    /// Parameter file; `None`: the embedded default vehicle (vehicles/paper.toml).
-    pub params: Option<PathBuf>,
-    /// Shorter horizons and a coarser map (for tests and quick looks).
+    /// Parameters of the vehicles (vehicle8 for the study's sections; all three in the audit).
+    pub params: ParamSource,
+    /// segway7's parameters in the audit, when they differ (its own vehicle file); `None`:
+    /// `params`.
+    pub segway_params: Option<ParamSource>,
+    /// The parameter file's text, shown on the page (the embedded vehicles/paper.toml).
+    pub params_text: Option<String>,
+    /// Shorter horizons and a coarser map (tests and quick looks).
     pub quick: bool,
+    /// The audit's tolerance (normwise relative error of a term). Default 1e-11.
+    pub audit_tolerance: f64,
 }
 
-/// Everything the sections produce: the page, its figures and data files.
+impl Default for ReportSettings {
+    fn default() -> Self {
+        Self {
+            params: ParamSource::Defaults,
+            segway_params: None,
+            params_text: None,
+            quick: false,
+            audit_tolerance: AuditSettings::default().tolerance,
+        }
+    }
+}
+
+/// One horizon of the open-loop spectrum, from both initial bases.
+#[derive(Debug, Clone, Serialize)]
+pub struct HorizonRow {
+    /// T·K [s].
+    pub horizon_s: f64,
+    /// From the identity basis.
+    pub identity: SpectrumResult,
+    /// From a random orthonormal basis (seed 1).
+    pub random_seed_1: SpectrumResult,
+}
+
+/// Everything the report computed, as results.json holds it.
+#[derive(Debug, Clone, Serialize)]
+pub struct ReportResults {
+    /// Whether every check passed.
+    pub passed: bool,
+    /// The checks.
+    pub checks: Vec<Check>,
+    /// The findings, in page order.
+    pub findings: Vec<Finding>,
+    /// The study's claims.
+    pub claims: Vec<Claim>,
+    /// The model section: description, parameters, the derived terms.
+    pub model: sections::ModelSection,
+    /// The audits (vehicle8, vehicle7, segway7).
+    pub audit: Vec<AuditReport>,
+    /// The open-loop spectrum at the study preset.
+    pub lyapunov_preset: SpectrumResult,
+    /// The same at longer horizons.
+    pub lyapunov_horizons: Vec<HorizonRow>,
+    /// The phase portraits.
+    pub phase: PhaseResult,
+    /// Forward and backward tilt recovery.
+    pub recovery: Vec<SimResult>,
+    /// The linear analysis of the study's PD.
+    pub linear: LinearReport,
+    /// The tuned gains.
+    pub tune: TuneReport,
+    /// The stability map's points.
+    pub map: Vec<PointResult>,
+    /// The closed-loop spectrum under the study's PD.
+    pub closed_loop_lyapunov: SpectrumResult,
+    /// Wall time of the build [s].
+    pub wall_time_s: f64,
+}
+
+/// The report: the page, its files, and the verdict.
 pub struct Report {
-    pub page: Page,
-    pub figures: Vec<Figure>,
-    /// (file name, contents) of the data files.
-    pub data: Vec<(String, String)>,
-    /// Key results, written to results.json.
-    pub results: serde_json::Map<String, serde_json::Value>,
+    /// index.html.
+    pub html: String,
+    /// Figures (SVG and PNG), data files and results.json, by name under the report folder.
+    pub files: Files,
+    /// Everything computed.
+    pub results: ReportResults,
 }
 
 impl Report {
-    fn new() -> Self {
-        Self {
-            page: Page::default(),
-            figures: Vec::new(),
-            data: Vec::new(),
-            results: serde_json::Map::new(),
-        }
+    /// Whether every check passed (the binary exits non-zero otherwise, after writing).
+    pub fn passed(&self) -> bool {
+        self.results.passed
     }
 
-    /// Add a figure to the page and to the files.
-    pub fn figure(&mut self, file: &str, svg: String, caption: &str) {
-        let fig = Figure {
-            file: format!("figures/{file}"),
-            svg,
-            caption: caption.to_string(),
-        };
-        self.page.figure(&fig);
-        self.figures.push(fig);
-    }
-
-    pub fn data(&mut self, file: &str, contents: String) {
-        self.data.push((format!("data/{file}"), contents));
-    }
-
-    pub fn result(&mut self, key: &str, value: serde_json::Value) {
-        self.results.insert(key.to_string(), value);
+    /// The checks that failed.
+    pub fn failed_checks(&self) -> Vec<&Check> {
+        self.results.checks.iter().filter(|c| !c.passed).collect()
     }
 }
 
-/// Parse a command line with the CLI's own parser.
-pub fn command(words: &[String]) -> Result<Command> {
-    let mut argv = vec!["twv".to_string()];
-    argv.extend(words.iter().cloned());
-    Ok(Cli::try_parse_from(&argv)
-        .with_context(|| format!("report step `twv {}`", words.join(" ")))?
-        .command)
-}
-
-/// The `--params FILE` words for a settings object.
-pub fn params_words(settings: &ReportSettings) -> Vec<String> {
-    match &settings.params {
-        Some(p) => vec!["--params".into(), p.display().to_string()],
-        None => Vec::new(),
-    }
-}
-
-/// Build the report into `dir`; returns the files written and the wall time.
-pub fn build(settings: &ReportSettings, dir: &Path) -> Result<(Vec<PathBuf>, f64)> {
+/// Builds the report (no files written: see [`Report::files`]).
+pub fn build(settings: &ReportSettings, progress: &dyn Progress) -> Result<Report> {
     let start = Instant::now();
-    let steps = sections::STEPS;
-    let bar = ProgressBar::new(steps.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    let mut report = Report::new();
-    report
-        .page
-        .heading(1, "twv report: two-wheeled self-balancing vehicle");
-    for (name, step) in steps {
-        bar.set_message(*name);
-        step(settings, &mut report).with_context(|| format!("report section `{name}`"))?;
-        bar.inc(1);
+    progress.start(sections::STEPS as u64, "report sections");
+    let result = sections::compute(settings, progress);
+    progress.finish();
+    let mut results = result?;
+    results.wall_time_s = start.elapsed().as_secs_f64();
+    let (html, figures) = sections::page(settings, &results)?;
+    let mut files = Files::new();
+    for f in &figures {
+        files.text(&f.file, f.svg.clone());
+        let stem = f.file.strip_suffix(".svg").unwrap_or(&f.file);
+        files.0.push((format!("{stem}.png"), f.png.clone()));
     }
-    bar.finish_and_clear();
-    let seconds = start.elapsed().as_secs_f64();
-    report.result("wall_time_s", serde_json::json!(seconds));
-    report.page.paragraph(&format!(
-        "Generated by twv {} in {seconds:.1} s.",
-        env!("CARGO_PKG_VERSION")
-    ));
-    let html = std::mem::take(&mut report.page).finish("twv report");
-    let mut out = OutputDir::create(dir)?;
-    std::fs::create_dir_all(dir.join("figures")).with_context(|| format!("{}", dir.display()))?;
-    std::fs::create_dir_all(dir.join("data")).with_context(|| format!("{}", dir.display()))?;
-    for fig in &report.figures {
-        out.write(&fig.file, fig.svg.as_bytes())?;
+    for (name, text) in sections::data_files(&results) {
+        files.text(&name, text);
     }
-    for (file, contents) in &report.data {
-        out.write(file, contents.as_bytes())?;
-    }
-    out.write(
-        "results.json",
-        serde_json::to_string_pretty(&report.results)?.as_bytes(),
-    )?;
-    out.write("index.html", html.as_bytes())?;
-    Ok((out.commit(), seconds))
+    files.json("results.json", &results);
+    files.text("index.html", html.clone());
+    Ok(Report {
+        html,
+        files,
+        results,
+    })
 }

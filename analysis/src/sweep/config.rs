@@ -6,10 +6,11 @@ use serde::{Deserialize, Serialize};
 use super::grid::Grid;
 
 /// The quantity mapped over the grid.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Metric {
-    /// Largest Lyapunov exponent of the nonlinear closed loop from the tilt, study preset
+    /// Largest Lyapunov exponent of the nonlinear closed loop's pitch-loop states (the drift
+    /// directions projected off), from the tilt, after a transient, study sampling
     MaxLyapunov,
     /// Largest real part of the linear pitch loop's poles at the upright
     SpectralAbscissa,
@@ -21,7 +22,7 @@ impl Metric {
     /// Name and unit for tables and figures.
     pub fn label(&self) -> &'static str {
         match self {
-            Metric::MaxLyapunov => "largest Lyapunov exponent λ1 [1/s]",
+            Metric::MaxLyapunov => "largest Lyapunov exponent of the pitch loop λ1 [1/s]",
             Metric::SpectralAbscissa => "spectral abscissa max Re s [1/s]",
             Metric::SettlingTime => "2 % settling time of Φ [s]",
         }
@@ -36,8 +37,12 @@ pub struct MetricSettings {
     pub h: f64,
     /// Lyapunov re-orthonormalisation interval T [s].
     pub t_sample: f64,
-    /// Lyapunov iterations K.
+    /// Lyapunov iterations K (averaged after the transient).
     pub iterations: usize,
+    /// Lyapunov transient [s]: the tangent aligns with the slowest loop mode before averaging
+    /// starts, so a stable loop's λ1 is its slowest decay rate rather than a mix with the
+    /// initial basis.
+    pub transient: f64,
     /// Settling-time run length [s].
     pub t_end: f64,
     /// Settling-time sample interval [s].
@@ -47,12 +52,14 @@ pub struct MetricSettings {
 }
 
 impl Default for MetricSettings {
-    /// The study's preset: h = 1 ms, T = 0.1 s, K = 100; 10 s runs sampled every 10 ms; π/2.
+    /// The study's sampling (h = 1 ms, T = 0.1 s, K = 100) after a 1 s transient; 10 s runs
+    /// sampled every 10 ms; π/2.
     fn default() -> Self {
         Self {
             h: 1e-3,
             t_sample: 0.1,
             iterations: 100,
+            transient: 1.0,
             t_end: 10.0,
             sample: 0.01,
             fall_angle: std::f64::consts::FRAC_PI_2,

@@ -16,8 +16,8 @@ use twv_model::Model;
 use super::config::MetricSettings;
 use super::metric::{lyapunov_settings, max_lyapunov, result};
 use super::point::{PointResult, Status};
-use crate::control::PidLoop;
-use crate::integrate::{equal_steps, rk4_step_each, Rk4Scratch, VarState};
+use crate::control::{loop_states, PidLoop};
+use crate::integrate::{equal_steps, project, rk4_step_each, Rk4Scratch, VarState};
 use crate::lyapunov::{initial_basis, orthonormalize};
 
 /// λ1 of the closed loops `loops[l]` (the grid points `indices[l]`) from the model state `x0`:
@@ -36,14 +36,14 @@ where
         VarState::new(loops[l].initial_state(x0), initial_basis(&settings.basis))
     });
     // What the one-point path reports as an error before its first step (invalid settings or
-    // step, a non-finite start, a transient) is left to it.
+    // step, a non-finite start) is left to it.
     let plain = settings.validate().is_err()
         || !(s.h.is_finite() && s.h > 0.0)
-        || settings.transient != 0.0
         || start.iter().any(|y| y.non_finite_part().is_some());
     if plain {
         return core::array::from_fn(|l| max_lyapunov(&loops[l], x0, s, indices[l]));
     }
+    let keep: [[bool; NA]; LANES] = core::array::from_fn(|l| loop_states(&loops[l], &[start[l].x]));
 
     let phi = loops[0].plant().measured.phi;
     let mut y = start;
@@ -51,12 +51,28 @@ where
     let mut finished: [Option<Status>; LANES] = [None; LANES];
     let mut log_sum = [0.0; LANES];
     let mut t = 0.0;
-    'intervals: for i in 1..=settings.iterations {
-        let t_stop = i as f64 * settings.t_sample;
+    // The interval ends of `lyapunov_spectrum_with`: the transient's, then K measured ones
+    // counted from its end, each reached in equal steps of about h.
+    let n_transient = (settings.transient / settings.t_sample * (1.0 - 1e-12)).ceil() as usize;
+    let t0 = settings.transient;
+    let ends = (1..=n_transient)
+        .map(|i| {
+            let end = if i == n_transient {
+                settings.transient
+            } else {
+                i as f64 * settings.t_sample
+            };
+            (end, false)
+        })
+        .chain((1..=settings.iterations).map(|i| (t0 + i as f64 * settings.t_sample, true)));
+    'intervals: for (t_stop, measured) in ends {
         let (steps, h) = equal_steps(t_stop - t, s.h);
         for step in 1..=steps {
             let finite = rk4_step_each(t, h, &mut y, &mut scratch, |t, y, dy| {
-                PidLoop::eval_lanes(loops, t, y, dy)
+                PidLoop::eval_lanes(loops, t, y, dy);
+                for (d, k) in dy.iter_mut().zip(&keep) {
+                    project(k, &mut d.w[0]);
+                }
             });
             t = if step == steps { t_stop } else { t + h };
             for l in 0..LANES {
@@ -80,10 +96,10 @@ where
                 continue;
             }
             let r = orthonormalize(&mut y[l].w)[0];
-            if r.is_finite() && r > 0.0 {
-                log_sum[l] += r.ln();
-            } else {
+            if !(r.is_finite() && r > 0.0) {
                 finished[l] = Some(Status::Failed);
+            } else if measured {
+                log_sum[l] += r.ln();
             }
         }
     }
@@ -91,7 +107,7 @@ where
         let g = loops[l].settings().pitch.gains;
         match finished[l] {
             Some(status) => result(indices[l], &g, None, status),
-            None => result(indices[l], &g, Some(log_sum[l] / t), Status::Ok),
+            None => result(indices[l], &g, Some(log_sum[l] / (t - t0)), Status::Ok),
         }
     })
 }

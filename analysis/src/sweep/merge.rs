@@ -12,8 +12,8 @@ use super::config::{Metric, SweepConfig};
 use super::error::{ranges, SweepError};
 use super::file::{shard_paths, ShardFile};
 use super::point::PointResult;
-use crate::output::OutputDir;
-use crate::plot::{heat_map, HeatMap};
+use crate::output::Files;
+use crate::plot::{Figure, HeatMap};
 
 /// Format tag of map.json.
 pub const MAP_FORMAT: &str = "twv-sweep-map/1";
@@ -25,6 +25,33 @@ pub struct Map {
     pub config_hash: String,
     pub config: SweepConfig,
     pub points: Vec<PointResult>,
+}
+
+impl Map {
+    /// A map of points computed in memory (no shard files): what the report draws.
+    pub fn in_memory(
+        model: &str,
+        grid: super::grid::Grid,
+        metric: Metric,
+        points: Vec<PointResult>,
+    ) -> Self {
+        let config = SweepConfig {
+            model: model.to_string(),
+            source: String::new(),
+            params: Vec::new(),
+            metric,
+            grid,
+            x0: Vec::new(),
+            controller: serde_json::Value::Null,
+            settings: super::config::MetricSettings::default(),
+        };
+        Self {
+            format: MAP_FORMAT,
+            config_hash: config.hash(),
+            config,
+            points,
+        }
+    }
 }
 
 /// Reads every shard in `dir` and checks they form one complete sweep.
@@ -115,13 +142,17 @@ impl Map {
 
     /// Heat maps over (Kp, Kd), one per Ki value: `map.svg` for the first Ki (the only one
     /// without a Ki axis), `map-ki-<k>.svg` for the k-th after it.
-    pub fn figures(&self) -> Result<Vec<(String, String)>, SweepError> {
+    pub fn figures(&self) -> Vec<(String, Figure)> {
         let grid = &self.config.grid;
         let signed = self.config.metric != Metric::SettlingTime;
         let (xs, ys) = (grid.kp.values(), grid.kd.values());
         let mut out = Vec::new();
         for (k, slice) in self.points.chunks(grid.map_len()).enumerate() {
             let values: Vec<f64> = slice.iter().map(|p| p.value.unwrap_or(f64::NAN)).collect();
+            let missing: Vec<Option<&'static str>> = slice
+                .iter()
+                .map(|p| p.value.is_none().then(|| p.status.label()))
+                .collect();
             let boundary: Vec<f64> = slice
                 .iter()
                 .map(|p| p.stability_indicator(signed))
@@ -132,25 +163,40 @@ impl Map {
                 self.config.model,
                 self.config.metric.label()
             );
-            let svg = heat_map(&HeatMap {
-                title: &title,
-                x_label: "Kp [N/rad]",
-                y_label: "Kd [N s/rad]",
-                value_label: self.config.metric.label(),
-                xs: &xs,
-                ys: &ys,
-                values: &values,
-                boundary: &boundary,
-                size: (900, 700),
-            })?;
+            let map = Figure::Heat(HeatMap {
+                title,
+                x_label: "Kp [N/rad]".into(),
+                y_label: "Kd [N s/rad]".into(),
+                value_label: self.config.metric.label().into(),
+                xs: xs.clone(),
+                ys: ys.clone(),
+                values,
+                missing,
+                boundary,
+                signed,
+                size: (960, 700),
+            });
             let name = if k == 0 {
                 "map.svg".to_string()
             } else {
                 format!("map-ki-{k}.svg")
             };
-            out.push((name, svg));
+            out.push((name, map));
         }
-        Ok(out)
+        out
+    }
+}
+
+impl Map {
+    /// map.csv, map.json and the figures (SVG and PNG).
+    pub fn files(&self) -> Result<Files, SweepError> {
+        let mut files = Files::new();
+        files.text("map.csv", self.csv());
+        files.json("map.json", self);
+        for (name, figure) in self.figures() {
+            files.figure(&name, &figure)?;
+        }
+        Ok(files)
     }
 }
 
@@ -158,12 +204,6 @@ impl Map {
 /// nothing).
 pub fn merge(dir: &Path) -> Result<(Map, Vec<PathBuf>), SweepError> {
     let map = collect(dir)?;
-    let mut files = OutputDir::create(dir)?;
-    files.write("map.csv", map.csv().as_bytes())?;
-    let json = serde_json::to_string_pretty(&map).expect("a map serialises");
-    files.write("map.json", json.as_bytes())?;
-    for (name, svg) in map.figures()? {
-        files.write(&name, svg.as_bytes())?;
-    }
-    Ok((map, files.commit()))
+    let written = map.files()?.write(dir)?;
+    Ok((map, written))
 }

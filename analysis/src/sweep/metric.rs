@@ -9,8 +9,8 @@ use twv_model::Model;
 use super::config::MetricSettings;
 use super::fall::FallStop;
 use super::point::{PointResult, Status};
-use crate::control::{run_closed_loop, ControlError, PidLoop, RunEnd, RunSettings};
-use crate::integrate::Rk4;
+use crate::control::{loop_states, run_closed_loop, ControlError, PidLoop, RunEnd, RunSettings};
+use crate::integrate::{Projected, Rk4};
 use crate::linear::{LoopOptions, PidGains, PitchLoop};
 use crate::lyapunov::{
     initial_basis, lyapunov_spectrum_with, InitialBasis, IntegratorChoice, LyapunovError,
@@ -48,13 +48,14 @@ pub fn spectral_abscissa(pitch: &PitchLoop, index: usize, g: &PidGains) -> Point
     }
 }
 
-/// The study's Lyapunov preset for one exponent: T, K and h from `s`, identity basis, no
-/// trace check and no running estimates (neither is looked at, and the trace costs a dense
+/// The Lyapunov settings for one exponent: T, K, the transient and h from `s`, identity basis,
+/// no trace check and no running estimates (neither is looked at, and the trace costs a dense
 /// Jacobian per stage).
 pub fn lyapunov_settings(s: &MetricSettings) -> LyapunovSettings {
     LyapunovSettings {
         t_sample: s.t_sample,
         iterations: s.iterations,
+        transient: s.transient,
         integrator: IntegratorChoice::Rk4 { h: s.h },
         basis: InitialBasis::Identity,
         trace_check: false,
@@ -63,8 +64,9 @@ pub fn lyapunov_settings(s: &MetricSettings) -> LyapunovSettings {
     }
 }
 
-/// λ1 of the closed loop from the model state `x0`; `Fell` as soon as |Φ| passes the fall
-/// angle (the run stops there: see [`FallStop`]).
+/// λ1 of the closed loop's pitch-loop coordinates ([`loop_states`]: the tangent dynamics with
+/// the drift directions projected off) from the model state `x0`; `Fell` as soon as |Φ| passes
+/// the fall angle (the run stops there: see [`FallStop`]).
 pub fn max_lyapunov<M, const NX: usize, const NU: usize, const NA: usize>(
     field: &PidLoop<'_, M, NX, NU, NA>,
     x0: &[f64; NX],
@@ -78,8 +80,12 @@ where
     let settings = lyapunov_settings(s);
     let fell = Cell::new(false);
     let xa = field.initial_state(x0);
+    let projected = Projected {
+        field,
+        keep: loop_states(field, &[xa]),
+    };
     let w0 = initial_basis::<NA, 1>(&settings.basis);
-    let outcome = Rk4::new(field, 0.0, xa, w0, s.h, false)
+    let outcome = Rk4::new(projected, 0.0, xa, w0, s.h, false)
         .map_err(LyapunovError::from)
         .and_then(|inner| {
             let stepper = FallStop {
@@ -115,7 +121,7 @@ where
         integrator: IntegratorChoice::Rk4 { h: s.h },
         fall_angle: Some(s.fall_angle),
     };
-    match run_closed_loop(field, x0, &run) {
+    match run_closed_loop(field, x0, &run, &crate::progress::Silent) {
         Ok(r) => match (r.trajectory.end, r.metrics.phi.settling_time) {
             (RunEnd::Fell { .. }, _) => result(index, &g, None, Status::Fell),
             (RunEnd::Completed, Some(t)) => result(index, &g, Some(t), Status::Ok),

@@ -19,6 +19,19 @@ pub enum Status {
     Failed,
 }
 
+impl Status {
+    /// How figures and tables name it.
+    pub fn label(self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::Fell => "fell",
+            Status::BlewUp => "blew up",
+            Status::NotSettled => "not settled",
+            Status::Failed => "failed",
+        }
+    }
+}
+
 /// The result at one grid index.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct PointResult {

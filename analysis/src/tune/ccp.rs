@@ -47,6 +47,9 @@ pub(crate) struct Design {
     pub upper: Vec<f64>,
 }
 
+/// Index of Kp among the design variables (always the first).
+pub(crate) const KP: usize = 0;
+
 impl Design {
     /// Lays the grid (`points_per_decade` over [1e-3, 1e3] ω_ref, widened to 30/τ and 30/T,
     /// plus DC for PD) and the gain scales s_j = 1/|φ_j(jω_ref)|, ω_ref the largest plant pole.
@@ -106,6 +109,12 @@ impl Design {
         })
     }
 
+    /// Bounds Kp from above by `kp_max` (the effort bound; never below the lower bound).
+    pub fn bound_kp(&mut self, kp_max: f64) {
+        let x = (kp_max / self.scale[0]).max(self.lower[KP]);
+        self.upper[KP] = self.upper[KP].min(x);
+    }
+
     /// Number of variables.
     pub fn len(&self) -> usize {
         self.vars.len()
@@ -156,12 +165,7 @@ impl Design {
         for at in &self.basis {
             let l = self.response(at, x);
             for d in disks {
-                let off = l - d.centre;
-                let n = if off.norm() > 0.0 {
-                    off / off.norm()
-                } else {
-                    Complex::new(1.0, 0.0)
-                };
+                let n = exit_direction(l, d);
                 rows.push(at.iter().map(|b| (n.conj() * b).re).collect());
                 rhs.push(d.radius + d.centre * n.re);
                 radius.push(d.radius.max(1e-12));
@@ -169,6 +173,22 @@ impl Design {
         }
         (rows, rhs, radius)
     }
+}
+
+/// The unit direction n of the half-plane Re[n̄ (L − c)] ≥ r that replaces the disk at the
+/// point L⁰ (any unit n gives a half-plane outside the disk). Outside the disk: away from its
+/// centre, the tangent half-plane at the nearest boundary point. Inside it: away from the
+/// critical point −1 (which every requirement disk contains), the exit that does not carry the
+/// Nyquist curve across −1; leaving the other way would destabilise the loop, so the
+/// convex–concave step stalled there (a 60° disk phase margin, whose disk holds the study
+/// gains' DC point near its centre, was reported infeasible).
+fn exit_direction(l: Complex<f64>, d: &Disk) -> Complex<f64> {
+    let unit = |z: Complex<f64>| (z.norm() > 0.0).then(|| z / z.norm());
+    let off = l - d.centre;
+    let from_critical = unit(l + 1.0).filter(|_| off.norm() < d.radius);
+    from_critical
+        .or_else(|| unit(off))
+        .unwrap_or(Complex::new(1.0, 0.0))
 }
 
 /// How phase 1 ended.

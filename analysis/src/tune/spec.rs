@@ -26,6 +26,13 @@ pub enum Requirement {
         /// Bound on |S|.
         ms: f64,
     },
+    /// Control effort: the peak force of the certificate's tilt recovery ≤ `newtons`
+    /// (`force<=500`). The design bounds the force at the start of the recovery, Kp·Φ0 (a
+    /// convex bound on Kp); the nonlinear simulation of the certificate checks the peak.
+    PeakForce {
+        /// Bound on |F| [N].
+        newtons: f64,
+    },
 }
 
 /// A conjunction of requirements.
@@ -123,17 +130,22 @@ fn parse_one(part: &str) -> Result<Requirement, SpecError> {
             range("ms", "> 1", x > 1.0)?;
             Ok(Requirement::PeakSensitivity { ms: x })
         }
+        ("force", "<=", false) => {
+            range("force", "> 0 N", x > 0.0)?;
+            Ok(Requirement::PeakForce { newtons: x })
+        }
         _ => Err(SpecError::Unsupported(part.to_string())),
     }
 }
 
 impl Requirement {
-    /// The disk L(jω) must avoid.
-    pub fn disk(&self) -> Disk {
+    /// The disk L(jω) must avoid; `None` for the effort bound, which is no disk.
+    pub fn disk(&self) -> Option<Disk> {
         match *self {
-            Requirement::DiskPhase { deg } => balanced(alpha_from_phase_deg(deg)),
-            Requirement::DiskGain { factor } => balanced(alpha_from_gain(factor)),
-            Requirement::PeakSensitivity { ms } => Disk::sensitivity(ms),
+            Requirement::DiskPhase { deg } => Some(balanced(alpha_from_phase_deg(deg))),
+            Requirement::DiskGain { factor } => Some(balanced(alpha_from_gain(factor))),
+            Requirement::PeakSensitivity { ms } => Some(Disk::sensitivity(ms)),
+            Requirement::PeakForce { .. } => None,
         }
     }
 
@@ -151,10 +163,14 @@ impl Requirement {
             Requirement::PeakSensitivity { ms } => Requirement::PeakSensitivity {
                 ms: 1.0 + (ms - 1.0) / t.max(1e-12),
             },
+            Requirement::PeakForce { newtons } => Requirement::PeakForce {
+                newtons: newtons / t.max(1e-12),
+            },
         }
     }
 
-    /// Whether verified margins meet the requirement (to 1e-9 relative).
+    /// Whether verified margins meet the requirement (to 1e-9 relative); the effort bound is
+    /// not a margin (the tilt simulation checks it) and counts as met here.
     pub fn met_by(&self, m: &Margins) -> bool {
         let tol = 1e-9;
         m.stable
@@ -162,6 +178,7 @@ impl Requirement {
                 Requirement::DiskPhase { deg } => m.disk.phase_deg >= deg * (1.0 - tol),
                 Requirement::DiskGain { factor } => m.disk.gain_high >= factor * (1.0 - tol),
                 Requirement::PeakSensitivity { ms } => m.peak_sensitivity <= ms * (1.0 + tol),
+                Requirement::PeakForce { .. } => true,
             }
     }
 }
@@ -175,6 +192,17 @@ fn balanced(alpha: f64) -> Disk {
 }
 
 impl Spec {
+    /// The effort bound [N], if the spec has one (the smallest, if several).
+    pub fn peak_force(&self) -> Option<f64> {
+        self.requirements
+            .iter()
+            .filter_map(|r| match r {
+                Requirement::PeakForce { newtons } => Some(*newtons),
+                _ => None,
+            })
+            .reduce(f64::min)
+    }
+
     /// All requirements scaled by `t` (see [`Requirement::scaled`]).
     pub fn scaled(&self, t: f64) -> Self {
         Self {
@@ -197,6 +225,7 @@ impl fmt::Display for Spec {
                 Requirement::DiskPhase { deg } => format!("dpm>={deg}"),
                 Requirement::DiskGain { factor } => format!("dgm>={factor}"),
                 Requirement::PeakSensitivity { ms } => format!("ms<={ms}"),
+                Requirement::PeakForce { newtons } => format!("force<={newtons}"),
             })
             .collect();
         f.write_str(&parts.join(","))

@@ -52,6 +52,9 @@ pub struct TuneOptions {
     pub points_per_decade: usize,
     /// Convex subproblems per phase.
     pub max_iterations: usize,
+    /// The tilt [rad] of the certificate's recovery, on which a `force<=` bound is imposed as
+    /// Kp·tilt ≤ F (the force at the start of the recovery).
+    pub effort_tilt: f64,
 }
 
 impl Default for TuneOptions {
@@ -65,7 +68,17 @@ impl Default for TuneOptions {
             max_gain_factor: 100.0,
             points_per_decade: 40,
             max_iterations: 60,
+            effort_tilt: 0.1,
         }
+    }
+}
+
+impl TuneResult {
+    /// Whether the tuning succeeded: verified gains that meet every margin requirement (the
+    /// effort bound, if any, is checked on the nonlinear model by the caller).
+    pub fn met(&self) -> bool {
+        matches!(self.status, TuneStatus::Solved | TuneStatus::IterationLimit)
+            && self.certificate.as_ref().is_some_and(|c| c.meets_spec)
     }
 }
 
@@ -103,7 +116,7 @@ pub enum TuneError {
 }
 
 fn disks(spec: &Spec) -> Vec<Disk> {
-    spec.requirements.iter().map(|r| r.disk()).collect()
+    spec.requirements.iter().filter_map(|r| r.disk()).collect()
 }
 
 fn check(options: &TuneOptions) -> Result<Objective, TuneError> {
@@ -114,6 +127,12 @@ fn check(options: &TuneOptions) -> Result<Objective, TuneError> {
     if !(options.max_gain_factor.is_finite() && options.max_gain_factor > 0.0) {
         return Err(TuneError::Option {
             what: "max_gain_factor",
+            why: "must be finite and > 0",
+        });
+    }
+    if !(options.effort_tilt.is_finite() && options.effort_tilt > 0.0) {
+        return Err(TuneError::Option {
+            what: "effort_tilt",
             why: "must be finite and > 0",
         });
     }
@@ -143,10 +162,16 @@ pub fn tune(lp: &PitchLoop, spec: &Spec, options: &TuneOptions) -> Result<TuneRe
     let objective = check(options)?;
     let opts = options.loop_options;
     let design_for = |ppd: usize| {
-        Design::new(lp, &opts, options.pid, ppd, options.max_gain_factor).ok_or(TuneError::Option {
-            what: "model",
-            why: "the plant has a pole at its own reference frequency",
-        })
+        let mut d = Design::new(lp, &opts, options.pid, ppd, options.max_gain_factor).ok_or(
+            TuneError::Option {
+                what: "model",
+                why: "the plant has a pole at its own reference frequency",
+            },
+        )?;
+        if let Some(force) = spec.peak_force() {
+            d.bound_kp(force / options.effort_tilt);
+        }
+        Ok::<_, TuneError>(d)
     };
     let mut design = design_for(options.points_per_decade)?;
     let clamp = |d: &Design, x: Vec<f64>| -> Vec<f64> {
@@ -161,7 +186,7 @@ pub fn tune(lp: &PitchLoop, spec: &Spec, options: &TuneOptions) -> Result<TuneRe
             // Kp = s_p, Kd = s_d (for the pitch plant 2 M_x g and 2 M_x g/λ: stabilising),
             // Ki = 0, so the start is a PD even when tuning a PID.
             let unit = design.gains(&vec![1.0; design.len()]);
-            design.scaled(&PidGains { ki: 0.0, ..unit })
+            clamp(&design, design.scaled(&PidGains { ki: 0.0, ..unit }))
         }
     };
 
@@ -265,11 +290,22 @@ fn best_achievable(
             None => hi = mid,
         }
     }
+    // The certificate is always against the spec asked for, so `meets_spec`, the status and
+    // every message say the same thing; gains that happen to meet it after all are a solution.
+    let certificate = match best {
+        Some(c) => Some(certify(lp, &c.gains, &opts, spec)?),
+        None => None,
+    };
+    let met = certificate.as_ref().is_some_and(|c| c.meets_spec);
     Ok(TuneResult {
-        status: TuneStatus::Infeasible,
+        status: if met {
+            TuneStatus::Solved
+        } else {
+            TuneStatus::Infeasible
+        },
         spec: spec.clone(),
-        certificate: best,
-        best_fraction: lo,
+        certificate,
+        best_fraction: if met { 1.0 } else { lo },
         iterations: 0,
     })
 }
@@ -335,9 +371,14 @@ fn stabilising_start(
                 ki: 0.0,
                 kd: unit.kd * f(j),
             };
+            let x = design.scaled(&g);
+            let inside = x.iter().zip(&design.upper).all(|(v, u)| v <= u);
+            if !inside {
+                continue;
+            }
             if let Some(alpha) = coarse_alpha(lp, &g, opts)? {
                 if !best.as_ref().is_some_and(|b| alpha <= b.0) {
-                    best = Some((alpha, design.scaled(&g)));
+                    best = Some((alpha, x));
                 }
             }
         }

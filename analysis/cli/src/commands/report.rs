@@ -1,0 +1,74 @@
+//! `twv report`: the whole study reproduced into one self-contained HTML page.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+use twv_analysis::model::ParamSource;
+use twv_analysis::report::{build, ReportSettings};
+
+use crate::common::{Context, Outcome};
+
+/// Reproduce the study end to end: model and audit, Lyapunov spectra, phase portraits, tilt
+/// recovery, linear analysis and tuning, a stability map, and the study's claims checked.
+/// Exit status 3 when a check fails (the report is written first, so the reader sees why).
+#[derive(Args, Debug)]
+pub struct ReportArgs {
+    /// Parameter file (TOML, SI units) of the vehicles [default: the study's vehicle,
+    /// vehicles/paper.toml (segway7 in the audit: vehicles/segway.toml), embedded]
+    #[arg(long, value_name = "FILE")]
+    pub params: Option<PathBuf>,
+    /// Output folder (index.html, figures/, data/, results.json)
+    #[arg(long, value_name = "DIR", default_value = "report")]
+    pub out: PathBuf,
+    /// Shorter horizons and a coarser map (for a quick look and the tests)
+    #[arg(long)]
+    pub quick: bool,
+    /// Largest accepted normwise relative error of a term in the audit
+    #[arg(long, value_name = "REL", default_value_t = 1e-11)]
+    pub audit_tolerance: f64,
+}
+
+pub fn run(args: &ReportArgs, ctx: &Context) -> Result<Outcome> {
+    let settings = match &args.params {
+        Some(p) => ReportSettings {
+            params: ParamSource::File(p.clone()),
+            segway_params: None,
+            params_text: None,
+            quick: args.quick,
+            audit_tolerance: args.audit_tolerance,
+        },
+        None => ReportSettings {
+            params: ctx.vehicle_defaults("vehicle8").unwrap_or_default(),
+            segway_params: ctx.vehicle_defaults("segway7"),
+            params_text: Some(ctx.paper_toml().to_string()),
+            quick: args.quick,
+            audit_tolerance: args.audit_tolerance,
+        },
+    };
+    let bar = ctx.bar();
+    let report = build(&settings, &bar)?;
+    let files = report.files.0.len();
+    report.files.write(&args.out)?;
+    let index = args.out.join("index.html");
+    ctx.say(format!(
+        "wrote {files} files in {} ({:.1} s); open {}",
+        args.out.display(),
+        report.results.wall_time_s,
+        index.display()
+    ));
+    let failed = report.failed_checks();
+    if failed.is_empty() {
+        return Ok(Outcome::Done);
+    }
+    let names: Vec<String> = failed
+        .iter()
+        .map(|c| format!("{} ({})", c.name, c.detail))
+        .collect();
+    Ok(Outcome::Negative(format!(
+        "report written to {}, but {} check(s) failed: {}",
+        index.display(),
+        failed.len(),
+        names.join("; ")
+    )))
+}

@@ -1,0 +1,57 @@
+//! The `twv` command line: a thin shell over the twv-analysis API. Each command turns its
+//! arguments into typed settings, calls the library, writes the result files and prints.
+//!
+//! Exit codes: 0 done; 1 an error (bad input, a failed run, an unwritable output), one line on
+//! stderr naming the file, field or value; 2 a command-line syntax error; 3 the run completed
+//! but its verdict is negative (an audit or a report check failed, a tuning specification is
+//! not met, a pitch loop is unstable); 130 interrupted (a sweep leaves a checkpoint).
+
+mod args;
+mod commands;
+mod common;
+mod progress;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+use args::Cli;
+use common::{Context, Outcome};
+
+/// The study's vehicle and the Segway-like one, embedded so the binary runs from any folder;
+/// they are the default parameters of the shipped vehicles. Editing them and running
+/// `cargo build` rebuilds only this small crate.
+const PAPER_TOML: &str = include_str!("../../../vehicles/paper.toml");
+const SEGWAY_TOML: &str = include_str!("../../../vehicles/segway.toml");
+
+fn main() -> ExitCode {
+    restore_default_sigpipe();
+    let cli = Cli::parse();
+    let ctx = Context::new(PAPER_TOML, SEGWAY_TOML, cli.quiet);
+    common::install_interrupt_handler();
+    match commands::run(&cli.command, &ctx) {
+        Ok(Outcome::Done) => ExitCode::SUCCESS,
+        Ok(Outcome::Negative(message)) => {
+            eprintln!("twv: {message}");
+            ExitCode::from(3)
+        }
+        Ok(Outcome::Interrupted(message)) => {
+            eprintln!("twv: interrupted: {message}");
+            ExitCode::from(130)
+        }
+        Err(err) => {
+            eprintln!("twv: error: {}", common::describe(&err));
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// `twv ... | head` must end quietly when the reader goes away, like any Unix tool: Rust
+/// ignores SIGPIPE, which turns the closed pipe into a write error.
+fn restore_default_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first in main, before any thread exists; SIG_DFL is a valid disposition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}

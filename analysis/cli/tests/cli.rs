@@ -1,0 +1,281 @@
+//! The `twv` binary end to end: results on stdout, and for bad input one clear message naming
+//! the file, field or value, a non-zero exit, no panic or backtrace, and no partial output.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use common::{fails_with, twv};
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    common::scratch("cli", name)
+}
+
+fn paper_with(dir: &Path, edit: impl Fn(&str) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(repo().join("vehicles/paper.toml")).unwrap();
+    let path = dir.join("vehicle.toml");
+    std::fs::write(&path, edit(&text)).unwrap();
+    path
+}
+
+const X8: &str = "0.1,0,0,0,0,0,0,0";
+
+fn eval_with_params(params: &Path) -> Output {
+    twv(&[
+        "eval",
+        "--model",
+        "vehicle8",
+        "--params",
+        params.to_str().unwrap(),
+        "--x",
+        X8,
+    ])
+}
+
+#[test]
+fn eval_prints_f_and_jacobians_as_json() {
+    let out = twv(&[
+        "eval", "--model", "vehicle8", "--x", X8, "--u", "50,0", "--jac",
+    ]);
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["f"].as_array().unwrap().len(), 8);
+    assert_eq!(v["jac_x"].as_array().unwrap().len(), 8);
+    assert_eq!(v["jac_u"][0].as_array().unwrap().len(), 2);
+    // The pitch acceleration at a forward tilt is positive (the pendulum falls forward).
+    assert!(v["f"][4].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn interpreter_and_generated_code_agree_through_the_cli() {
+    let ir = repo().join("generated/ir/segway7.json");
+    let x = "0.3,1,2,0.5,-1,2,3";
+    let a = twv(&[
+        "eval", "--model", "segway7", "--x", x, "--u", "3,-2", "--jac",
+    ]);
+    let b = twv(&[
+        "eval",
+        "--ir",
+        ir.to_str().unwrap(),
+        "--x",
+        x,
+        "--u",
+        "3,-2",
+        "--jac",
+    ]);
+    assert!(a.status.success() && b.status.success());
+    assert_eq!(a.stdout, b.stdout, "bit-identical JSON");
+}
+
+#[test]
+fn malformed_toml_names_the_file() {
+    let dir = scratch("malformed");
+    let p = paper_with(&dir, |t| t.replace("m1 = 115.0", "m1 = = 115"));
+    fails_with(&eval_with_params(&p), &["vehicle.toml"]);
+}
+
+#[test]
+fn unknown_and_missing_keys_are_named() {
+    let dir = scratch("keys");
+    let p = paper_with(&dir, |t| format!("{t}\nwheelbase = 1.0\n"));
+    fails_with(&eval_with_params(&p), &["vehicle.toml", "wheelbase"]);
+    let p = paper_with(&dir, |t| t.replace("m2 = 8.0", ""));
+    fails_with(&eval_with_params(&p), &["vehicle.toml", "m2"]);
+}
+
+#[test]
+fn non_positive_mass_is_rejected() {
+    let dir = scratch("mass");
+    for bad in ["m1 = -115.0", "m1 = 0.0"] {
+        let p = paper_with(&dir, |t| t.replace("m1 = 115.0", bad));
+        fails_with(&eval_with_params(&p), &["vehicle.toml", "m1"]);
+    }
+}
+
+#[test]
+fn inertia_violating_the_triangle_inequality_is_rejected() {
+    let dir = scratch("triangle");
+    let p = paper_with(&dir, |t| {
+        t.replace("I2 = [0.81, 0.81, 0.03]", "I2 = [0.81, 0.3, 0.03]")
+    });
+    fails_with(&eval_with_params(&p), &["vehicle.toml", "I2"]);
+}
+
+#[test]
+fn nan_parameter_and_nan_state_are_rejected() {
+    let dir = scratch("nan");
+    let p = paper_with(&dir, |t| t.replace("b = 0.55", "b = nan"));
+    fails_with(&eval_with_params(&p), &["vehicle.toml", "b"]);
+    let out = twv(&["eval", "--model", "vehicle8", "--x", "0,0,0,0,0,0,0,NaN"]);
+    fails_with(&out, &["--x", "w_z"]);
+}
+
+#[test]
+fn wrong_state_length_names_the_states() {
+    let out = twv(&["eval", "--model", "vehicle7", "--x", X8]);
+    fails_with(&out, &["--x: 8 values", "7", "phi"]);
+}
+
+fn write_ir(dir: &Path, name: &str, edit: impl Fn(&str) -> String) -> PathBuf {
+    let text = std::fs::read_to_string(repo().join("generated/ir/lorenz.json")).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, twv_ir::rehash(&edit(&text))).unwrap();
+    path
+}
+
+/// An edit of an IR text.
+type Edit = Box<dyn Fn(&str) -> String>;
+
+#[test]
+fn malformed_ir_of_each_kind_is_a_clear_error() {
+    let dir = scratch("ir");
+    let cases: [(&str, Edit, &str); 4] = [
+        (
+            "version.json",
+            Box::new(|t: &str| t.replace("twv-ir/1", "twv-ir/9")),
+            "twv-ir/9",
+        ),
+        (
+            "op.json",
+            Box::new(|t: &str| t.replacen("\"sub\"", "\"frobnicate\"", 1)),
+            "frobnicate",
+        ),
+        (
+            "index.json",
+            Box::new(|t: &str| t.replacen("[3, \"sub\", 1, 2]", "[3, \"sub\", 1, 99]", 1)),
+            "99",
+        ),
+        (
+            "truncated.json",
+            Box::new(|t: &str| t[..t.len() / 2].to_string()),
+            "truncated.json",
+        ),
+    ];
+    for (name, edit, needle) in cases {
+        let path = write_ir(&dir, name, edit);
+        let out = twv(&["eval", "--ir", path.to_str().unwrap(), "--x", "1,2,3"]);
+        fails_with(&out, &[name, needle]);
+    }
+    // A file whose content does not match its hash was edited by hand.
+    let text = std::fs::read_to_string(repo().join("generated/ir/lorenz.json")).unwrap();
+    let tampered = dir.join("tampered.json");
+    std::fs::write(&tampered, text.replacen("10.0", "11.0", 1)).unwrap();
+    let out = twv(&["eval", "--ir", tampered.to_str().unwrap(), "--x", "1,2,3"]);
+    fails_with(&out, &["tampered.json", "hash"]);
+}
+
+#[test]
+fn blown_up_integration_names_the_time_and_state() {
+    let dir = scratch("blowup");
+    // β < 0 makes z grow like e^{100 t}: it overflows within the run.
+    let params = dir.join("lorenz.toml");
+    std::fs::write(&params, "sigma = 10.0\nrho = 28.0\nbeta = -100.0\n").unwrap();
+    let out_dir = dir.join("out");
+    let out = twv(&[
+        "lyap",
+        "--model",
+        "lorenz",
+        "--params",
+        params.to_str().unwrap(),
+        "--x0",
+        "1,1,1",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    fails_with(&out, &["t = ", "x = "]);
+    assert!(!out_dir.exists(), "no partial output");
+}
+
+#[test]
+fn unwritable_output_directory_is_an_error_without_output() {
+    let dir = scratch("unwritable");
+    let file = dir.join("a-file");
+    std::fs::write(&file, "").unwrap();
+    let target = file.join("sub");
+    let out = twv(&[
+        "lyap",
+        "--model",
+        "lorenz",
+        "--x0",
+        "1,1,1",
+        "--iterations",
+        "10",
+        "--out",
+        target.to_str().unwrap(),
+    ]);
+    fails_with(&out, &["a-file"]);
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        1,
+        "nothing written besides the file"
+    );
+}
+
+#[test]
+fn lyap_writes_json_csv_and_figure() {
+    let dir = scratch("lyap").join("out");
+    let out = twv(&[
+        "lyap",
+        "--model",
+        "lorenz",
+        "--x0",
+        "1,1,20",
+        "--iterations",
+        "50",
+        "--out",
+        dir.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for key in [
+        "exponents",
+        "stderr",
+        "sum",
+        "mean_trace",
+        "kaplan_yorke",
+        "classification",
+        "t_total",
+    ] {
+        assert!(v.get(key).is_some(), "{key}");
+    }
+    let csv = std::fs::read_to_string(dir.join("running.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 51, "header + one row per interval");
+    assert!(std::fs::read_to_string(dir.join("running.svg"))
+        .unwrap()
+        .starts_with("<svg"));
+}
+
+#[test]
+fn audit_passes_and_fails_cleanly() {
+    let out = twv(&["audit", "--model", "vehicle7", "--samples", "20"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("PASSED"));
+    let out = twv(&["audit", "--model", "lorenz"]);
+    fails_with(&out, &["lorenz"]);
+}
+
+#[test]
+fn every_subcommand_has_help() {
+    for cmd in ["eval", "codegen", "audit", "lyap"] {
+        let out = twv(&[cmd, "--help"]);
+        assert!(out.status.success(), "{cmd}");
+        assert!(
+            String::from_utf8_lossy(&out.stdout).contains("--model"),
+            "{cmd}"
+        );
+    }
+}

@@ -1,0 +1,445 @@
+//! Linearisation at an equilibrium: modes, the pitch loop's closed-loop poles and — only when
+//! that loop is stable — its margins, and an LQR design for comparison: `twv linear`.
+
+use nalgebra::{Complex, DMatrix};
+use serde::Serialize;
+use twv_model::{Model, ModelInfo};
+
+use crate::control::Plant;
+use crate::error::{Error, Result};
+use crate::linear::{
+    analyse_pitch, linearize, lqr, modes, HiddenPart, Linearization, LoopOptions, Lqr, Margins,
+    Mode, OperatingPoint, PidGains, PitchLoop,
+};
+use crate::model::{dispatch, state_vector, ModelTask, ResolvedModel};
+
+/// The cart–pendulum part of a vehicle, on which the LQR is designed (y, θ, v_y, w_z are not
+/// reachable by the pitch force).
+pub const LQR_STATES: [&str; 4] = ["phi", "x", "w_y", "v_x"];
+
+/// Where to linearise.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum At {
+    /// Everything zero: the pendulum upright at rest.
+    #[default]
+    Upright,
+    /// Φ = π, the rest zero.
+    Hanging,
+    /// A given state (SI units, rad).
+    State(Vec<f64>),
+}
+
+/// What to analyse. Defaults: upright, the study's PD, no lag or delay, LQR weights Q = I,
+/// R = 1e-4 I.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearSettings {
+    /// The operating point.
+    pub at: At,
+    /// Pitch PID gains.
+    pub gains: PidGains,
+    /// Actuator lag and delay in the loop.
+    pub loop_options: LoopOptions,
+    /// LQR state weight (the same for phi, x, w_y, v_x).
+    pub lqr_q: f64,
+    /// LQR input weight [1/N²].
+    pub lqr_r: f64,
+    /// Accept an operating point that is not an equilibrium (then the eigenvalues describe a
+    /// frozen-time linearisation along a trajectory, not a rest point).
+    pub allow_non_equilibrium: bool,
+}
+
+impl Default for LinearSettings {
+    fn default() -> Self {
+        Self {
+            at: At::Upright,
+            gains: crate::control::STUDY_PD,
+            loop_options: LoopOptions::default(),
+            lqr_q: 1.0,
+            lqr_r: 1e-4,
+            allow_non_equilibrium: false,
+        }
+    }
+}
+
+impl LinearSettings {
+    /// Checks the settings that do not depend on the model.
+    pub fn validate(&self) -> Result<()> {
+        for (field, v) in [("lqr_q", self.lqr_q), ("lqr_r", self.lqr_r)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::input(field, format!("{v} must be finite and > 0")));
+            }
+        }
+        self.loop_options.check()?;
+        for (field, v) in [
+            ("kp", self.gains.kp),
+            ("ki", self.gains.ki),
+            ("kd", self.gains.kd),
+        ] {
+            if !v.is_finite() {
+                return Err(Error::input(field, format!("{v} is not finite")));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What the pitch loop is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LoopVerdict {
+    /// Every loop pole has Re < 0 (and the delay is below the delay margin).
+    Stable,
+    /// A loop pole has Re ≥ 0, or the delay exceeds the delay-free loop's delay margin.
+    Unstable,
+    /// The force does not reach Φ (e.g. a pendulum centroid on the hinge, b = 0): there is no
+    /// loop to close.
+    NoLoop,
+}
+
+/// A phase margin and where it is attained.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PhaseMargin {
+    /// Degrees.
+    pub deg: f64,
+    /// Gain crossover [rad/s].
+    pub frequency: f64,
+}
+
+/// The margins of a stable loop; `None` in an optional field means unbounded.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StableMargins {
+    /// Factor to which the loop gain may shrink before instability (M_x g / Kp for the pitch
+    /// loop; 0: any).
+    pub gain_margin_lower: f64,
+    /// Factor by which it may grow; `None`: any.
+    pub gain_margin_upper: Option<f64>,
+    /// Smallest phase margin over the gain crossovers; `None`: no gain crossover.
+    pub phase_margin: Option<PhaseMargin>,
+    /// Extra delay tolerated [s]; `None`: any.
+    pub delay_margin: Option<f64>,
+    /// Balanced disk margin α.
+    pub disk_alpha: f64,
+    /// The disk's gain interval: lower factor.
+    pub disk_gain_low: f64,
+    /// The disk's gain interval: upper factor; `None`: unbounded (α ≥ 2).
+    pub disk_gain_high: Option<f64>,
+    /// The disk's phase margin ±deg.
+    pub disk_phase_deg: f64,
+    /// Where |S − ½| peaks [rad/s]; `None`: at infinity.
+    pub disk_frequency: Option<f64>,
+    /// Peak sensitivity ‖S‖∞.
+    pub peak_sensitivity: f64,
+}
+
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+impl StableMargins {
+    /// The margins of a stable loop (`None` for an unstable one: margins are then undefined).
+    pub fn of(m: &Margins) -> Option<Self> {
+        m.stable.then(|| Self {
+            gain_margin_lower: m.gain_margin_lower,
+            gain_margin_upper: finite(m.gain_margin_upper),
+            phase_margin: finite(m.phase_margin_deg)
+                .zip(finite(m.phase_margin_frequency))
+                .map(|(deg, frequency)| PhaseMargin { deg, frequency }),
+            delay_margin: finite(m.delay_margin),
+            disk_alpha: m.disk.alpha,
+            disk_gain_low: m.disk.gain_low,
+            disk_gain_high: finite(m.disk.gain_high),
+            disk_phase_deg: m.disk.phase_deg,
+            disk_frequency: finite(m.disk.frequency),
+            peak_sensitivity: m.peak_sensitivity,
+        })
+    }
+}
+
+/// The pitch loop with its verdict.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PitchReport {
+    /// Stable, unstable, or no loop.
+    pub verdict: LoopVerdict,
+    /// Poles of the loop itself (minimal plant with the controller and lag states).
+    pub loop_poles: Vec<Complex<f64>>,
+    /// Largest real part of the loop poles; `None` without a loop.
+    pub spectral_abscissa: Option<f64>,
+    /// Modes the loop cannot move or see (the drift x, v_x, y, θ, …): open-loop eigenvalues.
+    pub hidden: Vec<HiddenPart>,
+    /// The margins, only for a stable loop.
+    pub margins: Option<StableMargins>,
+}
+
+impl PitchReport {
+    /// The pitch loop of `lp` with `gains`.
+    pub fn of(lp: &PitchLoop, gains: &PidGains, options: &LoopOptions) -> Result<Self> {
+        let analysis = analyse_pitch(lp, gains, options)?;
+        let cl = &analysis.closed_loop;
+        let verdict = if lp.plant().order() == 0 {
+            LoopVerdict::NoLoop
+        } else if analysis.margins.stable {
+            LoopVerdict::Stable
+        } else {
+            LoopVerdict::Unstable
+        };
+        Ok(Self {
+            verdict,
+            loop_poles: cl.loop_eigenvalues.clone(),
+            spectral_abscissa: finite(cl.spectral_abscissa),
+            hidden: cl.hidden.clone(),
+            margins: match verdict {
+                LoopVerdict::Stable => StableMargins::of(&analysis.margins),
+                _ => None,
+            },
+        })
+    }
+}
+
+/// Everything `twv linear` finds.
+#[derive(Debug, Clone, Serialize)]
+pub struct LinearReport {
+    /// Model name.
+    pub model: String,
+    /// Where the parameters came from.
+    pub params: String,
+    /// The state linearised about.
+    pub at: Vec<f64>,
+    /// max |f| there (0 at an equilibrium).
+    pub residual: f64,
+    /// Whether the point is an equilibrium (residual within [`equilibrium_tolerance`]).
+    pub equilibrium: bool,
+    /// Open-loop modes.
+    pub open_loop: Vec<Mode>,
+    /// The pitch gains.
+    pub gains: PidGains,
+    /// Lag and delay.
+    pub loop_options: LoopOptions,
+    /// The pitch loop.
+    pub pitch: PitchReport,
+    /// States of the LQR design.
+    pub lqr_states: Vec<String>,
+    /// The LQR design, when the cart–pendulum part can be cut out.
+    pub lqr: Option<Lqr>,
+    /// Why there is no LQR design, if there is none.
+    pub lqr_note: Option<String>,
+}
+
+/// The largest max |f(x0)| that counts as an equilibrium: 1e-9 relative to the size of the
+/// terms (1 + max|A| · max|x0|).
+pub fn equilibrium_tolerance(a: &DMatrix<f64>, x0: &[f64]) -> f64 {
+    let x = x0.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    1e-9 * (1.0 + a.amax() * x)
+}
+
+/// The pitch loop of `lin`: the force acts along the input direction the controller uses
+/// (F1, or equal wheel torques for segway7).
+pub fn pitch_loop<const NX: usize, const NU: usize>(
+    lin: &Linearization<NX, NU>,
+    info: &ModelInfo,
+    model: &ResolvedModel,
+) -> Result<PitchLoop> {
+    let plant = Plant::<NU>::from_info(info, |n| model.param(n))?;
+    Ok(PitchLoop::from_linearization(lin, &plant.inputs.force)?)
+}
+
+struct Linear<'a>(&'a LinearSettings);
+
+impl ModelTask for Linear<'_> {
+    type Output = LinearReport;
+    fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
+        self,
+        model: &M,
+        resolved: &ResolvedModel,
+    ) -> Result<LinearReport> {
+        let s = self.0;
+        let info = model.info();
+        let at = match &s.at {
+            At::Upright => OperatingPoint::Upright,
+            At::Hanging => OperatingPoint::Hanging,
+            At::State(x) => OperatingPoint::State(state_vector("at", x, info.states)?),
+        };
+        let lin = linearize(model, &at, &[0.0; NU])?;
+        let (a, _) = lin.dynamic();
+        let equilibrium = lin.residual <= equilibrium_tolerance(&a, &lin.x0);
+        if !equilibrium && !s.allow_non_equilibrium {
+            return Err(Error::input(
+                "at",
+                format!(
+                    "not an equilibrium: max |f| = {:.3e} there (allow it explicitly to linearise \
+                     along a trajectory)",
+                    lin.residual
+                ),
+            ));
+        }
+        let open_loop = modes(&a, &lin.states)?;
+        let pitch = PitchReport::of(
+            &pitch_loop(&lin, &info, resolved)?,
+            &s.gains,
+            &s.loop_options,
+        )?;
+        let (lqr, lqr_note) = match lin.subsystem(&LQR_STATES) {
+            Ok((a_sub, b_sub)) => {
+                // Only the model's own inputs (an interpreted model may carry padding ones).
+                let nu = info.inputs.len();
+                let b_sub = b_sub.columns(0, nu).into_owned();
+                let q = DMatrix::identity(LQR_STATES.len(), LQR_STATES.len()) * s.lqr_q;
+                let r = DMatrix::identity(nu, nu) * s.lqr_r;
+                (Some(lqr(&a_sub, &b_sub, &q, &r)?), None)
+            }
+            Err(e) => (None, Some(e.to_string())),
+        };
+        Ok(LinearReport {
+            model: resolved.name().to_string(),
+            params: resolved.params_origin.clone(),
+            at: lin.x0.to_vec(),
+            residual: lin.residual,
+            equilibrium,
+            open_loop,
+            gains: s.gains,
+            loop_options: s.loop_options,
+            pitch,
+            lqr_states: LQR_STATES.iter().map(|s| s.to_string()).collect(),
+            lqr,
+            lqr_note,
+        })
+    }
+}
+
+/// The linear analysis of `model` with `settings`.
+pub fn analyse(model: &ResolvedModel, settings: &LinearSettings) -> Result<LinearReport> {
+    settings.validate()?;
+    dispatch(model, Linear(settings))
+}
+
+/// A complex number for people: `-1.428571` or `-0.5 + 1.2i`.
+pub fn complex(c: &Complex<f64>) -> String {
+    if c.im.abs() < 1e-12 * c.re.abs().max(1.0) {
+        format!("{:+.6}", c.re)
+    } else {
+        format!(
+            "{:+.6} {} {:.6}i",
+            c.re,
+            if c.im < 0.0 { '-' } else { '+' },
+            c.im.abs()
+        )
+    }
+}
+
+fn list(values: &[Complex<f64>]) -> String {
+    values.iter().map(complex).collect::<Vec<_>>().join(", ")
+}
+
+impl PitchReport {
+    /// The verdict, the poles and (for a stable loop) the margins, a few lines.
+    pub fn summary(&self) -> String {
+        let mut s = String::new();
+        match self.verdict {
+            LoopVerdict::NoLoop => {
+                s += "    no loop: the force does not reach Φ (its transfer function is zero), \
+                      so there is nothing to stabilise and no margin to state\n";
+            }
+            _ => s += &format!("    loop poles: {}\n", list(&self.loop_poles)),
+        }
+        for h in &self.hidden {
+            s += &format!(
+                "    uncontrolled ({:?}): {} ({})\n",
+                h.kind,
+                list(&h.eigenvalues),
+                h.states.join(", ")
+            );
+        }
+        match (&self.margins, self.verdict) {
+            (Some(m), _) => {
+                let or_any = |v: Option<f64>, unit: &str| {
+                    v.map_or("unbounded".to_string(), |v| format!("{v:.4}{unit}"))
+                };
+                s += &format!(
+                    "    gain margin [{:.4}, {}], phase margin {}, delay margin {}\n",
+                    m.gain_margin_lower,
+                    or_any(m.gain_margin_upper, ""),
+                    m.phase_margin
+                        .map_or("unbounded (no gain crossover)".to_string(), |p| {
+                            format!("{:.2}° at {:.3} rad/s", p.deg, p.frequency)
+                        }),
+                    or_any(m.delay_margin, " s"),
+                );
+                s += &format!(
+                    "    disk margin α = {:.4}: gain [{:.4}, {}], phase ±{:.2}°; peak |S| = {:.3}\n",
+                    m.disk_alpha,
+                    m.disk_gain_low,
+                    or_any(m.disk_gain_high, ""),
+                    m.disk_phase_deg,
+                    m.peak_sensitivity
+                );
+            }
+            (None, LoopVerdict::Unstable) => s += "    unstable: margins undefined\n",
+            (None, _) => {}
+        }
+        s
+    }
+}
+
+impl LinearReport {
+    /// A readable summary.
+    pub fn summary(&self) -> String {
+        let mut s = format!(
+            "linear analysis of {} ({}), residual {:.1e}{}\n",
+            self.model,
+            self.params,
+            self.residual,
+            if self.equilibrium {
+                ""
+            } else {
+                " (NOT an equilibrium: frozen-time linearisation)"
+            }
+        );
+        s += "  open-loop modes:\n";
+        // Repeated eigenvalues share one eigenspace: print each group once with its multiplicity.
+        let mut i = 0;
+        while i < self.open_loop.len() {
+            let m = &self.open_loop[i];
+            let same = self.open_loop[i..]
+                .iter()
+                .take_while(|n| n.kind == m.kind && n.states == m.states)
+                .count();
+            let value = if same > 1 {
+                format!("{} (×{same})", complex(&m.eigenvalue))
+            } else {
+                complex(&m.eigenvalue)
+            };
+            s += &format!("    {value:<28} {:?} ({})\n", m.kind, m.states.join(", "));
+            i += same;
+        }
+        let g = &self.gains;
+        s += &format!(
+            "  pitch loop Kp = {}, Ki = {}, Kd = {}: {}\n",
+            g.kp,
+            g.ki,
+            g.kd,
+            match self.pitch.verdict {
+                LoopVerdict::Stable => "stable",
+                LoopVerdict::Unstable => "UNSTABLE",
+                LoopVerdict::NoLoop => "NO LOOP",
+            }
+        );
+        s += &self.pitch.summary();
+        match (&self.lqr, &self.lqr_note) {
+            (Some(l), _) => {
+                s += &format!(
+                    "  LQR on ({}): {:?}, residual {:.1e}, K = {:.4}",
+                    self.lqr_states.join(", "),
+                    l.status,
+                    l.residual,
+                    l.k
+                );
+                s += &format!(
+                    "    closed-loop poles: {}\n",
+                    list(&l.closed_loop_eigenvalues)
+                );
+            }
+            (None, Some(note)) => s += &format!("  LQR: not designed ({note})\n"),
+            (None, None) => {}
+        }
+        s
+    }
+}

@@ -1,0 +1,46 @@
+//! The typed API: one function per job, each from a resolved model and settings (defaults
+//! beside each field, `validate()`) to a serde-serialisable result with its verdict. The CLI,
+//! the report, the Python package and the live page all call these; nothing here parses
+//! arguments or writes files (see [`crate::output`] for that shared step).
+//!
+//! | job | settings | function | result |
+//! |---|---|---|---|
+//! | eval | [`EvalSettings`] | [`evaluate`] | [`EvalResult`] |
+//! | codegen | [`CodegenSettings`] | [`generate`] | the source |
+//! | audit | [`crate::audit::AuditSettings`] | [`audit_model`] | [`crate::audit::AuditReport`] |
+//! | lyap | [`SpectrumSettings`] | [`spectrum()`] | [`SpectrumResult`] |
+//! | sim, disturb | [`SimSettings`] | [`simulate()`] | [`SimResult`] |
+//! | phase | [`PhaseSettings`] | [`portraits`] | [`PhaseResult`] |
+//! | linear | [`LinearSettings`] | [`analyse`] | [`LinearReport`] |
+//! | tune | [`TuneSettings`] | [`tune_model`] | [`TuneReport`] |
+//! | sweep | [`SweepSettings`] | [`sweep()`], [`run_shard`] | points, [`ShardOutcome`] |
+
+mod audit;
+mod codegen;
+mod eval;
+mod linear;
+mod phase;
+mod simulate;
+mod spectrum;
+mod sweep;
+mod tune;
+
+pub use crate::progress::{CancelFlag, Progress, Silent};
+pub use audit::{audit_model, AUDITED, MAX_SAMPLES};
+pub use codegen::{camel, generate, CodegenSettings};
+pub use eval::{evaluate, EvalResult, EvalSettings};
+pub use linear::{
+    analyse, complex, equilibrium_tolerance, pitch_loop, At, LinearReport, LinearSettings,
+    LoopVerdict, PhaseMargin, PitchReport, StableMargins, LQR_STATES,
+};
+pub use phase::{portraits, Drive, PhaseResult, PhaseRun, PhaseSettings, Portrait, DEFAULT_TILTS};
+pub use simulate::{
+    recovery_of, simulate, InputDirections, Recovery, SimResult, SimSettings, MANEUVER_V_LOOP,
+    RECOVERED_PHI,
+};
+pub use spectrum::{drift_states, spectrum, SpectrumResult, SpectrumSettings, Timing};
+pub use sweep::{
+    compute_points, run_shard, status_counts, sweep, Computed, ShardOptions, ShardOutcome,
+    SweepSettings, MAX_POINTS,
+};
+pub use tune::{tilt_check, tune_model, TiltCheck, TuneReport, TuneSettings, TuneVerdict};

@@ -1,0 +1,339 @@
+//! Phase portraits (Φ, Φ̇): closed loop for several gain sets side by side (the study's
+//! Fig. 4 a–d), or open loop under constant inputs: `twv phase`.
+
+use serde::Serialize;
+use twv_model::Model;
+
+use crate::control::{
+    scenario, simulate, ControllerSettings, PidLoop, Plant, RunEnd, RunSettings, Trajectory,
+};
+use crate::error::{Error, Result};
+use crate::integrate::{OpenLoop, VectorField};
+use crate::linear::eigenvalues;
+use crate::model::{dispatch_control, input_vector, state_vector, ControlTask, ResolvedModel};
+use crate::output::Files;
+use crate::plot::{Curve, Figure, Grid, LineChart};
+use crate::progress::Progress;
+
+/// What drives one portrait.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Drive {
+    /// The PID controller.
+    Closed(ControllerSettings),
+    /// Constant inputs, in the model's input order.
+    Open(Vec<f64>),
+}
+
+/// The portraits to draw.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhaseSettings {
+    /// (label, drive) per portrait. Default the study's four gain sets.
+    pub portraits: Vec<(String, Drive)>,
+    /// Initial model states; `None`: at rest with Φ = 0.1, −0.1, 0.2, −0.2 rad.
+    pub x0: Option<Vec<Vec<f64>>>,
+    /// Length, sampling and integrator of each run. Default 10 s.
+    pub run: RunSettings,
+}
+
+impl Default for PhaseSettings {
+    fn default() -> Self {
+        Self {
+            portraits: scenario::STUDY_GAIN_SETS
+                .iter()
+                .map(|s| {
+                    (
+                        s.label.to_string(),
+                        Drive::Closed(ControllerSettings::pid(s.gains)),
+                    )
+                })
+                .collect(),
+            x0: None,
+            run: RunSettings::default(),
+        }
+    }
+}
+
+/// The default initial tilts [rad].
+pub const DEFAULT_TILTS: [f64; 4] = [0.1, -0.1, 0.2, -0.2];
+
+/// One portrait: a gain set (or constant input) and its trajectories.
+#[derive(Debug, Clone, Serialize)]
+pub struct Portrait {
+    /// Label.
+    pub label: String,
+    /// The controller of a closed-loop portrait.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub controller: Option<ControllerSettings>,
+    /// The constant input of an open-loop portrait.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub input: Option<Vec<f64>>,
+    /// Largest real part of the non-zero eigenvalues at the upright (the zero ones are the
+    /// drift modes no pitch loop moves) [1/s]; `None` when every eigenvalue is zero.
+    pub loop_abscissa: Option<f64>,
+    /// Whether the linearised loop at the upright is stable (`loop_abscissa` < 0).
+    pub stable: bool,
+    /// The trajectories.
+    pub runs: Vec<PhaseRun>,
+}
+
+/// One trajectory of a portrait.
+#[derive(Debug, Clone, Serialize)]
+pub struct PhaseRun {
+    /// Initial state.
+    pub x0: Vec<f64>,
+    /// Initial pitch [rad].
+    pub phi0: f64,
+    /// How the run ended.
+    pub end: RunEnd,
+    /// Φ at the end [rad].
+    pub final_phi: f64,
+    /// Φ̇ at the end [rad/s].
+    pub final_phi_dot: f64,
+    /// Sample times.
+    #[serde(skip)]
+    pub t: Vec<f64>,
+    /// (Φ, Φ̇) at the samples.
+    #[serde(skip)]
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Every portrait.
+#[derive(Debug, Clone, Serialize)]
+pub struct PhaseResult {
+    /// Model name.
+    pub model: String,
+    /// Where the parameters came from.
+    pub params: String,
+    /// The run settings.
+    pub run: RunSettings,
+    /// The portraits.
+    pub portraits: Vec<Portrait>,
+}
+
+struct PhaseTask<'a> {
+    progress: &'a dyn Progress,
+    drive: &'a Drive,
+    starts: &'a [Vec<f64>],
+    run: &'a RunSettings,
+}
+
+fn runs<F: VectorField<N>, const N: usize>(
+    field: F,
+    starts: &[[f64; N]],
+    (phi, w_y): (usize, usize),
+    run: &RunSettings,
+    progress: &dyn Progress,
+) -> Result<Vec<PhaseRun>> {
+    starts
+        .iter()
+        .map(|x0| {
+            let traj: Trajectory<N> = simulate(&field, x0, phi, run, progress)?;
+            let points: Vec<(f64, f64)> = traj.x.iter().map(|x| (x[phi], x[w_y])).collect();
+            let last = traj.last();
+            Ok(PhaseRun {
+                x0: x0[..].to_vec(),
+                phi0: x0[phi],
+                end: traj.end,
+                final_phi: last[phi],
+                final_phi_dot: last[w_y],
+                t: traj.t,
+                points,
+            })
+        })
+        .collect()
+}
+
+/// Largest real part of the eigenvalues of J at `x` that are not zero (drift modes); `None`
+/// when all are zero.
+fn loop_abscissa<F: VectorField<N>, const N: usize>(
+    field: &F,
+    x: &[f64; N],
+) -> Result<Option<f64>> {
+    let mut j = [[0.0; N]; N];
+    field.jacobian(0.0, x, &mut j);
+    let m = nalgebra::DMatrix::from_fn(N, N, |r, c| j[r][c]);
+    let scale = m.amax().max(1.0);
+    Ok(eigenvalues(&m)?
+        .iter()
+        .filter(|e| e.norm() > 1e-9 * scale)
+        .map(|e| e.re)
+        .reduce(f64::max))
+}
+
+type Drawn = (
+    Option<ControllerSettings>,
+    Option<Vec<f64>>,
+    Option<f64>,
+    Vec<PhaseRun>,
+);
+
+impl ControlTask for PhaseTask<'_> {
+    type Output = Drawn;
+    fn run<const NX: usize, const NU: usize, const NA: usize, M: Model<NX, NU>>(
+        self,
+        model: &M,
+        resolved: &ResolvedModel,
+    ) -> Result<Drawn> {
+        let info = model.info();
+        let starts: Vec<[f64; NX]> = self
+            .starts
+            .iter()
+            .map(|x| state_vector("x0", x, info.states))
+            .collect::<Result<_>>()?;
+        let p: Plant<NU> = Plant::from_info(&info, |n| resolved.param(n))?;
+        let index = (p.measured.phi, p.measured.w_y);
+        match self.drive {
+            Drive::Closed(settings) => {
+                let field = PidLoop::<_, NX, NU, NA>::new(model, settings, p)?;
+                let aug: Vec<[f64; NA]> = starts.iter().map(|x| field.initial_state(x)).collect();
+                let abscissa = loop_abscissa(&field, &[0.0; NA])?;
+                let runs = runs(field, &aug, index, self.run, self.progress)?;
+                Ok((Some(settings.clone()), None, abscissa, runs))
+            }
+            Drive::Open(u) => {
+                let u: [f64; NU] = input_vector("force", u, info.inputs)?;
+                let field = OpenLoop::new(model, u);
+                let abscissa = loop_abscissa(&field, &[0.0; NX])?;
+                let runs = runs(field, &starts, index, self.run, self.progress)?;
+                Ok((None, Some(u[..info.inputs.len()].to_vec()), abscissa, runs))
+            }
+        }
+    }
+}
+
+/// Computes the portraits.
+pub fn portraits(
+    model: &ResolvedModel,
+    settings: &PhaseSettings,
+    progress: &dyn Progress,
+) -> Result<PhaseResult> {
+    settings.run.validate()?;
+    if settings.portraits.is_empty() {
+        return Err(Error::input("portraits", "no gain sets or input sets"));
+    }
+    let starts: Vec<Vec<f64>> = match &settings.x0 {
+        Some(x) if x.is_empty() => return Err(Error::input("x0", "no initial states")),
+        Some(x) => x.clone(),
+        None => DEFAULT_TILTS
+            .iter()
+            .map(|&p| model.rest_with("phi", p))
+            .collect::<Result<_>>()?,
+    };
+    let mut out = Vec::new();
+    for (label, drive) in &settings.portraits {
+        let nz = match drive {
+            Drive::Closed(s) => {
+                s.validate()?;
+                s.n_states()
+            }
+            Drive::Open(_) => 0,
+        };
+        let task = PhaseTask {
+            progress,
+            drive,
+            starts: &starts,
+            run: &settings.run,
+        };
+        let (controller, input, loop_abscissa, runs) = dispatch_control(model, nz, task)?;
+        out.push(Portrait {
+            label: label.clone(),
+            controller,
+            input,
+            stable: loop_abscissa.is_some_and(|a| a < 0.0),
+            loop_abscissa,
+            runs,
+        });
+    }
+    Ok(PhaseResult {
+        model: model.name().to_string(),
+        params: model.params_origin.clone(),
+        run: settings.run,
+        portraits: out,
+    })
+}
+
+/// Size of one portrait [px].
+pub const PORTRAIT_SIZE: (u32, u32) = (560, 480);
+
+impl PhaseResult {
+    /// One chart per portrait.
+    pub fn portrait_figures(&self) -> Vec<LineChart> {
+        self.portraits
+            .iter()
+            .map(|p| {
+                let curves = p
+                    .runs
+                    .iter()
+                    .map(|r| Curve {
+                        name: format!("Φ0 = {:.3}", r.phi0),
+                        points: r.points.clone(),
+                    })
+                    .collect();
+                LineChart::new(&p.label, "Φ [rad]", "dΦ/dt [rad/s]", PORTRAIT_SIZE, curves)
+            })
+            .collect()
+    }
+
+    /// The portraits side by side, `columns` to a row.
+    pub fn combined_figure(&self, columns: usize) -> Figure {
+        Figure::Grid(Grid {
+            panels: self.portrait_figures(),
+            columns,
+        })
+    }
+
+    /// phase_1.svg … (one per portrait), phase.svg (two to a row), their PNGs, phase.csv and
+    /// phase.json.
+    pub fn files(&self) -> Result<Files> {
+        let mut f = Files::new();
+        for (i, chart) in self.portrait_figures().into_iter().enumerate() {
+            f.figure(&format!("phase_{}.svg", i + 1), &Figure::Line(chart))?;
+        }
+        f.figure("phase.svg", &self.combined_figure(2))?;
+        f.text("phase.csv", self.csv());
+        f.json("phase.json", self);
+        Ok(f)
+    }
+
+    /// The trajectories as CSV: set, run, t, Φ, Φ̇.
+    pub fn csv(&self) -> String {
+        let mut csv = String::from("set,run,t,phi,phi_dot\n");
+        for (i, p) in self.portraits.iter().enumerate() {
+            for (j, r) in p.runs.iter().enumerate() {
+                for (t, (phi, rate)) in r.t.iter().zip(&r.points) {
+                    csv += &format!("{},{},{t:e},{phi:e},{rate:e}\n", i + 1, j + 1);
+                }
+            }
+        }
+        csv
+    }
+
+    /// One line per portrait and per run.
+    pub fn summary(&self) -> String {
+        let mut s = format!(
+            "Phase portraits (Φ, Φ̇) of {} ({}), {} s\n",
+            self.model, self.params, self.run.t_end
+        );
+        for p in &self.portraits {
+            s += &match p.loop_abscissa {
+                Some(a) => format!(
+                    "{}: loop spectral abscissa {a:+.4} 1/s ({})\n",
+                    p.label,
+                    if p.stable { "stable" } else { "unstable" }
+                ),
+                None => format!("{}: every eigenvalue at the upright is zero\n", p.label),
+            };
+            for r in &p.runs {
+                let end = match r.end {
+                    RunEnd::Completed => format!(
+                        "ends at (Φ, Φ̇) = ({:+.3e}, {:+.3e})",
+                        r.final_phi, r.final_phi_dot
+                    ),
+                    RunEnd::Fell { t, .. } => format!("falls over at t = {t:.3} s"),
+                };
+                s += &format!("  Φ0 = {:+.3}: {end}\n", r.phi0);
+            }
+        }
+        s
+    }
+}

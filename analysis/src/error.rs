@@ -1,0 +1,111 @@
+//! The library's error: every way a job can refuse its input or fail, each naming the file,
+//! field or value. How a run *ended* (fell, not converged, infeasible) is a status in the
+//! result, not an error.
+
+use std::path::PathBuf;
+
+/// Why a job could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A model IR that does not read or validate.
+    #[error(transparent)]
+    Ir(#[from] twv_ir::IrError),
+    /// A parameter file or value that does not read or validate.
+    #[error(transparent)]
+    Params(#[from] twv_ir::ParamError),
+    /// A model that cannot be built with these sizes or values.
+    #[error(transparent)]
+    Model(#[from] twv_ir::ModelError),
+    /// An IR whose sizes the interpreter does not dispatch.
+    #[error(transparent)]
+    Size(#[from] twv_ir::UnsupportedSize),
+    /// No shipped model of that name.
+    #[error("unknown model `{name}` (shipped: {known})")]
+    UnknownModel {
+        /// The name asked for.
+        name: String,
+        /// The shipped names, comma-separated.
+        known: String,
+    },
+    /// A setting or input vector that is missing, malformed or out of range.
+    #[error("{field}: {reason}")]
+    Input {
+        /// The setting (the CLI option without its dashes).
+        field: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A job asked of a model that cannot do it (no pitch to control, no mechanics to audit).
+    #[error("model `{model}`: {reason}")]
+    Unsupported {
+        /// Model name.
+        model: String,
+        /// Why not.
+        reason: String,
+    },
+    /// A result that came out NaN or infinite.
+    #[error("{what} is not finite at {at}: the model is singular or overflows there")]
+    NonFinite {
+        /// Which output.
+        what: String,
+        /// The state (and input) it was evaluated at.
+        at: String,
+    },
+    /// Lyapunov settings or run.
+    #[error(transparent)]
+    Lyapunov(#[from] crate::lyapunov::LyapunovError),
+    /// Lyapunov settings alone.
+    #[error("invalid Lyapunov settings: {0}")]
+    LyapunovSettings(#[from] crate::lyapunov::SettingsError),
+    /// Controller settings or a closed-loop run.
+    #[error(transparent)]
+    Control(#[from] crate::control::ControlError),
+    /// Linear analysis.
+    #[error(transparent)]
+    Linear(#[from] crate::linear::LinearError),
+    /// The tuner's input.
+    #[error(transparent)]
+    Tune(#[from] crate::tune::TuneError),
+    /// A tuning specification that does not read.
+    #[error(transparent)]
+    Spec(#[from] crate::tune::SpecError),
+    /// Sweep grids, shards and merges.
+    #[error(transparent)]
+    Sweep(#[from] crate::sweep::SweepError),
+    /// An integration that failed.
+    #[error(transparent)]
+    Integrate(#[from] crate::integrate::IntegrateError),
+    /// Code generation.
+    #[error(transparent)]
+    Emit(#[from] twv_emit::EmitError),
+    /// A figure that could not be drawn.
+    #[error(transparent)]
+    Plot(#[from] crate::plot::PlotError),
+    /// Writing results.
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
+    /// Reading an input file.
+    #[error("cannot read {path}: {reason}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        reason: String,
+    },
+    /// The caller cancelled the run (Ctrl-C).
+    #[error("interrupted")]
+    Interrupted,
+}
+
+impl Error {
+    /// A bad setting or input.
+    pub fn input(field: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::Input {
+            field: field.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// The library's result type.
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,207 @@
+//! Resolving the model a job runs on — a shipped model by name or a model IR, with parameter
+//! values from its defaults, a file, or text — and the one place that hands it, with its sizes
+//! as constants, to the generic code ([`dispatch`], [`dispatch_control`]).
+
+mod dispatch;
+mod vector;
+
+use std::path::{Path, PathBuf};
+
+pub use dispatch::{dispatch, dispatch_control, ControlTask, ModelTask};
+pub use vector::{check_vector, input_vector, state_vector};
+
+use twv_ir::Ir;
+
+use crate::error::{Error, Result};
+
+/// Where a model's equations come from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ModelSource {
+    /// A shipped model (`vehicle8`, `vehicle7`, `segway7`, `lorenz`, `henon_heiles`): generated
+    /// code.
+    Shipped(String),
+    /// A model IR file (`twv-ir/1`): the interpreter, bit-identical to generated code.
+    IrFile(PathBuf),
+    /// A model IR already in memory (derived in the same session): the interpreter.
+    Ir(Box<Ir>),
+}
+
+impl Default for ModelSource {
+    /// The study's model, vehicle8.
+    fn default() -> Self {
+        ModelSource::Shipped("vehicle8".into())
+    }
+}
+
+/// Where the parameter values come from.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum ParamSource {
+    /// The defaults recorded in the model IR.
+    #[default]
+    Defaults,
+    /// A TOML parameter file (SI units).
+    File(PathBuf),
+    /// TOML text, with the name messages use for it (a front end's embedded vehicle file).
+    Text {
+        /// The TOML document.
+        text: String,
+        /// Its name in messages and reports.
+        origin: String,
+    },
+}
+
+/// A model and its parameters: what every job starts from.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ModelSpec {
+    /// The equations. Default vehicle8.
+    pub model: ModelSource,
+    /// The parameter values. Default the IR's.
+    pub params: ParamSource,
+}
+
+/// How a resolved model is evaluated.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Engine {
+    /// Generated code of the shipped model of this name.
+    Generated(String),
+    /// The IR interpreter.
+    Interpreted,
+}
+
+/// A resolved model: its IR (names, metadata), how it runs, and validated parameter values.
+#[derive(Debug, Clone)]
+pub struct ResolvedModel {
+    /// How it is evaluated.
+    pub engine: Engine,
+    /// Where the IR came from (`generated/ir/<name>.json` for a shipped model, the file name,
+    /// or the IR's own file label).
+    pub origin: String,
+    /// The model IR.
+    pub ir: Ir,
+    /// Parameter values in IR order.
+    pub params: Vec<f64>,
+    /// Where the values came from (a file, or a description of the defaults).
+    pub params_origin: String,
+}
+
+/// The names of the shipped models.
+pub fn shipped_models() -> Vec<&'static str> {
+    twv_generated::MODELS.iter().map(|(n, _)| *n).collect()
+}
+
+impl ModelSpec {
+    /// A shipped model with its IR defaults.
+    pub fn shipped(name: &str) -> Self {
+        Self {
+            model: ModelSource::Shipped(name.to_string()),
+            params: ParamSource::Defaults,
+        }
+    }
+
+    /// This spec with other parameter values.
+    pub fn with_params(mut self, params: ParamSource) -> Self {
+        self.params = params;
+        self
+    }
+
+    /// Reads and validates the IR and the parameters; errors name the file and the field.
+    pub fn resolve(&self) -> Result<ResolvedModel> {
+        let (engine, origin, ir) = match &self.model {
+            ModelSource::Shipped(name) => {
+                let Some(text) = twv_generated::ir_json(name) else {
+                    return Err(Error::UnknownModel {
+                        name: name.clone(),
+                        known: shipped_models().join(", "),
+                    });
+                };
+                let file = format!("generated/ir/{name}.json");
+                let ir = twv_ir::parse_ir(text, &file)?;
+                (Engine::Generated(name.clone()), file, ir)
+            }
+            ModelSource::IrFile(path) => (
+                Engine::Interpreted,
+                path.display().to_string(),
+                twv_ir::load_ir(path)?,
+            ),
+            ModelSource::Ir(ir) => (Engine::Interpreted, ir.file().to_string(), (**ir).clone()),
+        };
+        let (params, params_origin) = match &self.params {
+            ParamSource::Defaults => (
+                ir.params().iter().map(|p| p.default).collect(),
+                format!("defaults of {}", ir.model()),
+            ),
+            ParamSource::File(path) => (ir.load_params(path)?, path.display().to_string()),
+            ParamSource::Text { text, origin } => (
+                twv_ir::parse_params(text, origin, ir.params())?,
+                origin.clone(),
+            ),
+        };
+        Ok(ResolvedModel {
+            engine,
+            origin,
+            ir,
+            params,
+            params_origin,
+        })
+    }
+}
+
+impl ResolvedModel {
+    /// The model's name.
+    pub fn name(&self) -> &str {
+        self.ir.model()
+    }
+
+    /// Parameter value by IR name (e.g. `m2`, `I2_yy`).
+    pub fn param(&self, name: &str) -> Option<f64> {
+        self.ir
+            .params()
+            .iter()
+            .position(|p| p.name == name)
+            .map(|i| self.params[i])
+    }
+
+    /// State names in order.
+    pub fn states(&self) -> Vec<&str> {
+        self.ir.states().iter().map(|s| s.name.as_str()).collect()
+    }
+
+    /// Input names in order.
+    pub fn inputs(&self) -> Vec<&str> {
+        self.ir.inputs().iter().map(|s| s.name.as_str()).collect()
+    }
+
+    /// Index of a state by name.
+    pub fn state_index(&self, name: &str) -> Option<usize> {
+        self.ir.states().iter().position(|s| s.name == name)
+    }
+
+    /// A state at rest with only `name` set to `value` (e.g. a tilt of Φ).
+    pub fn rest_with(&self, name: &str, value: f64) -> Result<Vec<f64>> {
+        let i = self.state_index(name).ok_or_else(|| Error::Unsupported {
+            model: self.name().to_string(),
+            reason: format!("no state `{name}` (states: {})", self.states().join(", ")),
+        })?;
+        let mut x = vec![0.0; self.ir.nx()];
+        x[i] = value;
+        Ok(x)
+    }
+
+    /// Whether the model runs on generated code.
+    pub fn is_shipped(&self) -> bool {
+        matches!(self.engine, Engine::Generated(_))
+    }
+
+    /// Where the IR came from, as recorded in sweep configs: `shipped` or the file.
+    pub fn source_label(&self) -> String {
+        match &self.engine {
+            Engine::Generated(_) => "shipped".to_string(),
+            Engine::Interpreted => self.origin.clone(),
+        }
+    }
+
+    /// The IR file path, for an interpreted model read from a file.
+    pub fn ir_path(&self) -> Option<&Path> {
+        matches!(self.engine, Engine::Interpreted).then(|| Path::new(&self.origin))
+    }
+}
