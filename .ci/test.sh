@@ -5,6 +5,15 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 step() { printf '\n== %s\n' "$*"; }
 
+step "machine"
+# Which kernels the bit-for-bit ISA tests can compare here (they say so when they cannot).
+grep -m1 "model name" /proc/cpuinfo || true
+if grep -qw avx512f /proc/cpuinfo && grep -qw avx512vl /proc/cpuinfo; then
+    echo "AVX-512F/VL: yes (the AVX-512 builds are compared with the baseline builds)"
+else
+    echo "AVX-512F/VL: no (the AVX-512 comparisons are skipped and say so)"
+fi
+
 step "python environment (.venv, pinned)"
 bash .ci/setup-python.sh
 py=.venv/bin/python

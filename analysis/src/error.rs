@@ -55,7 +55,7 @@ pub enum Error {
     #[error(transparent)]
     Lyapunov(#[from] crate::lyapunov::LyapunovError),
     /// Lyapunov settings alone.
-    #[error("invalid Lyapunov settings: {0}")]
+    #[error("invalid Lyapunov settings")]
     LyapunovSettings(#[from] crate::lyapunov::SettingsError),
     /// Controller settings or a closed-loop run.
     #[error(transparent)]

@@ -15,6 +15,7 @@
 //!         lyapunov: LyapunovSettings::preset_paper(),
 //!         ..SpectrumSettings::default()
 //!     },
+//!     &twv_analysis::api::Silent,
 //! )?;
 //! println!("{}", result.result.classification);
 //! # Ok::<(), twv_analysis::Error>(())

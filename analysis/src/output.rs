@@ -58,15 +58,36 @@ impl Files {
     }
 
     /// Writes every file into `dir` (created if missing, subfolders too), each atomically;
-    /// all or nothing: after a failure nothing of this call is left.
+    /// all or nothing: after a failure nothing of this call is left. Files that an earlier
+    /// write into `dir` made and this one does not (a figure of a state that no longer moves)
+    /// are removed, so a reused folder never mixes two runs; `dir`'s other files are left
+    /// alone (the names written are kept in `dir/.twv-files`).
     pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, OutputError> {
+        let manifest = dir.join(MANIFEST);
+        let previous = fs::read_to_string(&manifest).unwrap_or_default();
         let mut out = OutputDir::create(dir)?;
         for (name, bytes) in &self.0 {
             out.write(name, bytes)?;
         }
-        Ok(out.commit())
+        let names = self.names().join("\n") + "\n";
+        write_atomic(&manifest, names.as_bytes())?;
+        let written = out.commit();
+        let current: std::collections::HashSet<&str> = self.names().into_iter().collect();
+        for stale in previous
+            .lines()
+            .filter(|n| !n.is_empty() && !current.contains(n))
+        {
+            // Only plain relative names this writer made; never climb out of `dir`.
+            if !stale.contains("..") && !Path::new(stale).is_absolute() {
+                let _ = fs::remove_file(dir.join(stale));
+            }
+        }
+        Ok(written)
     }
 }
+
+/// The list of files the last [`Files::write`] put into a folder.
+const MANIFEST: &str = ".twv-files";
 
 /// A folder receiving the files of one run.
 ///
@@ -180,6 +201,30 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_reused_folder_keeps_no_stale_files() {
+        let dir = std::env::temp_dir().join(format!("twv-output-stale-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        let mut first = Files::new();
+        first.text("a.csv", "1");
+        first.text("v_y.svg", "<svg/>");
+        first.write(&dir).unwrap();
+        fs::write(dir.join("mine.txt"), "kept").unwrap();
+        let mut second = Files::new();
+        second.text("a.csv", "2");
+        second.write(&dir).unwrap();
+        assert!(
+            !dir.join("v_y.svg").exists(),
+            "the earlier run's figure is gone"
+        );
+        assert_eq!(fs::read_to_string(dir.join("a.csv")).unwrap(), "2");
+        assert!(
+            dir.join("mine.txt").exists(),
+            "files twv did not write stay"
+        );
+        fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn uncommitted_output_is_removed() {

@@ -103,3 +103,12 @@ def test_unwritable_output_leaves_no_file(tmp_path: Path):
         assert list(locked.iterdir()) == []
     finally:
         locked.chmod(0o700)
+
+
+def test_test_data_ir_is_what_its_source_derives(tmp_path: Path):
+    """tests/data/ring11.json (used by the Rust tests) is fresh: derived again, the same bytes."""
+    data = REPO_ROOT / "tests" / "data"
+    out = tmp_path / "ring11.json"
+    r = run("derive", "--file", str(data / "ring11.py"), "--out", str(out))
+    assert r.returncode == 0, r.stderr
+    assert out.read_bytes() == (data / "ring11.json").read_bytes()

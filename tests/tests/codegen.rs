@@ -110,7 +110,7 @@ fn same_model<const NX: usize, const NU: usize>(
     }
     // Eight points at once (generated: one instruction stream; interpreter: the trait's
     // default, one point after another).
-    use twv_model::lanes::LANES;
+    use twv_kernels::lanes::LANES;
     let mut x = [[0.0; NX]; LANES];
     let mut u = [[0.0; NU]; LANES];
     for l in 0..LANES {
@@ -766,6 +766,40 @@ mod malformed_ir {
         assert!(err.to_string().contains("content hash mismatch"), "{err}");
         let text = LORENZ.replacen("sha256:c3", "sha256:zz", 1);
         assert!(matches!(error(&text).problem, Problem::MalformedHash(_)));
+    }
+
+    /// An IR whose ∂f/∂x is not the derivative of its f (one constant of `jac_x` edited, the
+    /// hash recomputed) is refused at load, naming the entry.
+    #[test]
+    fn a_jacobian_that_disagrees_with_f_is_refused() {
+        let value: Value = serde_json::from_str(LORENZ).unwrap();
+        let ins = &value["functions"]["jac_x"]["instructions"];
+        let k = ins
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|i| i[1] == "const" && i[2] == -1.0)
+            .expect("∂ẏ/∂y = −1 is a constant");
+        let mut edited = value.clone();
+        edited["functions"]["jac_x"]["instructions"][k][2] = json!(-1.5);
+        let text = twv_ir::rehash(&serde_json::to_string_pretty(&edited).unwrap());
+        let err = error(&text);
+        let msg = err.to_string();
+        assert!(msg.contains("jac_x") && msg.contains("[y, y]"), "{msg}");
+        assert!(msg.contains("central differences"), "{msg}");
+    }
+
+    /// Two equal keys in one object are refused (serde_json alone keeps the last silently).
+    #[test]
+    fn duplicate_keys_are_refused() {
+        let text = LORENZ.replacen(
+            "\"model\": \"lorenz\"",
+            "\"model\": \"lorenz\", \"model\": \"x\"",
+            1,
+        );
+        assert_ne!(text, LORENZ);
+        let msg = error(&text).to_string();
+        assert!(msg.contains("duplicate key `model`"), "{msg}");
     }
 
     #[test]

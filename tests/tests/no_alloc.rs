@@ -44,7 +44,7 @@ fn hot_path_allocations<const NX: usize, const NU: usize>(model: &impl Model<NX,
     let (mut f, mut jac, mut jw) = ([0.0; NX], [[0.0; NX]; NX], [[0.0; NX]; 8]);
     let mut sparse = [0.0; 64];
     let mut ju = [[0.0; NU]; NX];
-    const L: usize = twv_model::lanes::LANES;
+    const L: usize = twv_kernels::lanes::LANES;
     let (xl, ul, wl) = ([x; L], [u; L], [[0.3; NX]; L]);
     let (mut fl, mut jwl, mut jul) = ([[0.0; NX]; L], [[0.0; NX]; L], [[[0.0; NU]; NX]; L]);
     let before = allocations();

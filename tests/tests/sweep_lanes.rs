@@ -10,7 +10,7 @@ use twv_analysis::control::{
 use twv_analysis::linear::PidGains;
 use twv_analysis::sweep::{max_lyapunov_lanes, metric, MetricSettings, PointResult, Status};
 use twv_generated::Vehicle8;
-use twv_model::lanes::LANES;
+use twv_kernels::lanes::LANES;
 use twv_model::Model;
 
 fn plant(model: &Vehicle8) -> Plant<2> {
@@ -65,7 +65,7 @@ fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> V
         .map(|l| metric::max_lyapunov(&loops[l], &x0, &s, indices[l]))
         .collect();
     for baseline in [false, true] {
-        twv_model::isa::force_baseline(baseline);
+        twv_kernels::isa::force_baseline(baseline);
         let lanes = max_lyapunov_lanes(&loops, &x0, &s, indices);
         for (a, b) in lanes.iter().zip(&one) {
             let tag = format!("{what} (baseline kernel: {baseline}) point {}", b.index);
@@ -81,7 +81,7 @@ fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> V
             );
         }
     }
-    twv_model::isa::force_baseline(false);
+    twv_kernels::isa::force_baseline(false);
     one.iter().map(|p| p.status).collect()
 }
 

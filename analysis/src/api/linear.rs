@@ -8,8 +8,8 @@ use twv_model::{Model, ModelInfo};
 use crate::control::Plant;
 use crate::error::{Error, Result};
 use crate::linear::{
-    analyse_pitch, linearize, lqr, modes, HiddenPart, Linearization, LoopOptions, Lqr, Margins,
-    Mode, OperatingPoint, PidGains, PitchLoop,
+    analyse_pitch, linearize, lqr, modes, CareStatus, HiddenPart, Linearization, LoopOptions, Lqr,
+    Margins, Mode, OperatingPoint, PidGains, PitchLoop,
 };
 use crate::model::{dispatch, state_vector, ModelTask, ResolvedModel};
 
@@ -284,7 +284,17 @@ impl ModelTask for Linear<'_> {
                 let b_sub = b_sub.columns(0, nu).into_owned();
                 let q = DMatrix::identity(LQR_STATES.len(), LQR_STATES.len()) * s.lqr_q;
                 let r = DMatrix::identity(nu, nu) * s.lqr_r;
-                (Some(lqr(&a_sub, &b_sub, &q, &r)?), None)
+                let design = lqr(&a_sub, &b_sub, &q, &r)?;
+                match design.status {
+                    CareStatus::Solved => (Some(design), None),
+                    status => (
+                        None,
+                        Some(format!(
+                            "the Riccati equation has no usable solution ({status:?}): the \
+                             cart–pendulum part is not stabilisable by the inputs"
+                        )),
+                    ),
+                }
             }
             Err(e) => (None, Some(e.to_string())),
         };

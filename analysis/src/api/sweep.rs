@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use twv_model::lanes::LANES;
+use twv_kernels::lanes::LANES;
 use twv_model::Model;
 
 use super::linear::pitch_loop;

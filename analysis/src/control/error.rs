@@ -7,7 +7,7 @@ use crate::integrate::IntegrateError;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ControlError {
     /// A setting that is not finite or outside its range.
-    #[error("invalid controller setting {what} = {value}: {why}")]
+    #[error("invalid setting {what} = {value:?}: {why}")]
     InvalidSetting {
         /// Which setting.
         what: &'static str,

@@ -2,7 +2,7 @@
 //! controller's), with its exact Jacobian, so the same value runs in the integrators, the
 //! simulations and `lyapunov_spectrum` (see [`crate::integrate::field`] for the recipe).
 
-use twv_model::lanes::LANES;
+use twv_kernels::lanes::LANES;
 use twv_model::Model;
 
 use super::error::ControlError;

@@ -20,7 +20,7 @@
 //! let plant = Plant::<2>::from_info(&model.info(), |_| None)?;
 //! let field = PidLoop::<_, 8, 2, 8>::new(model, &settings, plant)?; // PD: no controller state
 //! let x0 = scenario::tilted::<8>(model.info().states, 0.1)?;
-//! let run = run_closed_loop(&field, &x0, &RunSettings::default())?;
+//! let run = run_closed_loop(&field, &x0, &RunSettings::default(), &twv_analysis::progress::Silent)?;
 //! println!("settled after {:?} s", run.metrics.phi.settling_time);
 //! # Ok(()) }
 //! ```

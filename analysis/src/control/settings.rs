@@ -40,7 +40,7 @@ impl Setpoint {
             Setpoint::Constant { value } => (value, 0.0),
             Setpoint::Sine { amplitude } => {
                 // Inline, as in the generated kernels (a C library call here cost 7 % of a sweep).
-                let (s, c) = twv_model::trig::sin_cos(phi);
+                let (s, c) = twv_kernels::trig::sin_cos(phi);
                 (amplitude * s, amplitude * c)
             }
         }

@@ -14,7 +14,7 @@
 //! ```no_run
 //! # use twv_analysis::integrate::OpenLoop;
 //! # use twv_analysis::lyapunov::{lyapunov_spectrum, LyapunovSettings};
-//! # fn demo<M: twv_model::Model<8, 2>>(model: &M, x0: [f64; 8]) -> anyhow::Result<()> {
+//! # fn demo<M: twv_model::Model<8, 2>>(model: &M, x0: [f64; 8]) -> Result<(), Box<dyn std::error::Error>> {
 //! let field = OpenLoop::new(model, [0.0, 0.0]);
 //! let result = lyapunov_spectrum::<_, 8, 8>(&field, &x0, &LyapunovSettings::preset_paper())?;
 //! println!("{}", serde_json::to_string(&result)?);

@@ -130,7 +130,9 @@ pub fn open_loop_finding(preset: &SpectrumResult, horizons: &[(f64, Vec<f64>)]) 
                 t1 / t2,
                 (t1 / t2).sqrt()
             );
-            if transient {
+            if matches!(class, Classification::Equilibrium { .. }) {
+                "an equilibrium"
+            } else if transient {
                 "finite-time transient, not chaos"
             } else {
                 "persistent exponents"

@@ -1,6 +1,6 @@
 //! The max-Lyapunov metric at [`LANES`] grid points at once: the points' closed loops are
 //! stepped together so the model runs through its lanes kernel (one AVX-512 instruction stream
-//! for eight points, see `twv_model::lanes`), while everything else is done point by point with
+//! for eight points, see `twv_kernels::lanes`), while everything else is done point by point with
 //! the very code of the one-point path ([`rk4_step_each`], the PID law, [`orthonormalize`]).
 //! Every point therefore gets the bits of [`metric::max_lyapunov`](super::metric::max_lyapunov)
 //! (`tests/tests/sweep_lanes.rs` checks it) and still depends only on its index.
@@ -10,7 +10,7 @@
 //! back to its start state after every step (its results are ignored; a finite state near the
 //! start keeps the lanes kernel on its fast path); the group stops when every point is finished.
 
-use twv_model::lanes::LANES;
+use twv_kernels::lanes::LANES;
 use twv_model::Model;
 
 use super::config::MetricSettings;

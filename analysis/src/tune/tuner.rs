@@ -161,6 +161,16 @@ fn check(options: &TuneOptions) -> Result<Objective, TuneError> {
 pub fn tune(lp: &PitchLoop, spec: &Spec, options: &TuneOptions) -> Result<TuneResult, TuneError> {
     let objective = check(options)?;
     let opts = options.loop_options;
+    if lp.plant().order() == 0 {
+        // The force does not reach Φ: no gains move the loop, no margin can be met.
+        return Ok(TuneResult {
+            status: TuneStatus::Infeasible,
+            spec: spec.clone(),
+            certificate: None,
+            best_fraction: 0.0,
+            iterations: 0,
+        });
+    }
     let design_for = |ppd: usize| {
         let mut d = Design::new(lp, &opts, options.pid, ppd, options.max_gain_factor).ok_or(
             TuneError::Option {

@@ -50,7 +50,7 @@ pub fn lets(f: &Function, params: &Params) -> TokenStream {
     quote!(#(#lets)*)
 }
 
-/// The `let`s of `f` over lane arrays (`twv_model::lanes`): each instruction's scalar expression
+/// The `let`s of `f` over lane arrays (`twv_kernels::lanes`): each instruction's scalar expression
 /// written out for every lane, states and inputs read from the gathered lane arrays `xs`, `us`.
 /// Per lane these are the operations of [`lets`], in the same order.
 pub fn lane_lets(f: &Function, params: &Params) -> TokenStream {
@@ -63,7 +63,7 @@ pub fn lane_lets(f: &Function, params: &Params) -> TokenStream {
             let sc = format_ident!("sc{}", x);
             let pair = if sin_cos_done.insert(x) {
                 let x = value(x);
-                quote!(let #sc = ::twv_model::lanes::wide::sin_cos(#x);)
+                quote!(let #sc = ::twv_kernels::lanes::wide::sin_cos(#x);)
             } else {
                 TokenStream::new()
             };
@@ -72,7 +72,7 @@ pub fn lane_lets(f: &Function, params: &Params) -> TokenStream {
             } else {
                 quote!(1)
             };
-            return quote!(#pair let #v: ::twv_model::lanes::Lanes = #sc.#part;);
+            return quote!(#pair let #v: ::twv_kernels::lanes::Lanes = #sc.#part;);
         }
         let rhs = match *instr {
             Instr::Input { arg, index: i } => {
@@ -82,30 +82,30 @@ pub fn lane_lets(f: &Function, params: &Params) -> TokenStream {
                     Arg::U => quote!(us[#idx]),
                     Arg::P => {
                         let p = input(arg, i, params);
-                        quote!(::twv_model::lanes::splat(#p))
+                        quote!(::twv_kernels::lanes::splat(#p))
                     }
                 }
             }
             Instr::Const(c) => {
                 let c = float(c);
-                quote!(::twv_model::lanes::splat(#c))
+                quote!(::twv_kernels::lanes::splat(#c))
             }
             Instr::Unary(op, x) => {
                 let (e, x) = (unary(op, &a), value(x));
-                quote!(::twv_model::lanewise!(|#a| #e; #x))
+                quote!(::twv_kernels::lanewise!(|#a| #e; #x))
             }
             Instr::Binary(op, x, y) => {
                 let (e, x, y) = (binary(op, &a, &b), value(x), value(y));
                 match op {
-                    BinaryOp::Add => quote!(::twv_model::lanes::wide::add(#x, #y)),
-                    BinaryOp::Sub => quote!(::twv_model::lanes::wide::sub(#x, #y)),
-                    BinaryOp::Mul => quote!(::twv_model::lanes::wide::mul(#x, #y)),
-                    BinaryOp::Div => quote!(::twv_model::lanes::wide::div(#x, #y)),
-                    _ => quote!(::twv_model::lanewise!(|#a, #b| #e; #x, #y)),
+                    BinaryOp::Add => quote!(::twv_kernels::lanes::wide::add(#x, #y)),
+                    BinaryOp::Sub => quote!(::twv_kernels::lanes::wide::sub(#x, #y)),
+                    BinaryOp::Mul => quote!(::twv_kernels::lanes::wide::mul(#x, #y)),
+                    BinaryOp::Div => quote!(::twv_kernels::lanes::wide::div(#x, #y)),
+                    _ => quote!(::twv_kernels::lanewise!(|#a, #b| #e; #x, #y)),
                 }
             }
         };
-        quote!(let #v: ::twv_model::lanes::Lanes = #rhs;)
+        quote!(let #v: ::twv_kernels::lanes::Lanes = #rhs;)
     });
     quote!(#(#lets)*)
 }
@@ -130,8 +130,8 @@ fn unary(op: UnaryOp, a: &Ident) -> TokenStream {
         UnaryOp::Sqrt => quote!(#a.sqrt()),
         UnaryOp::Sq => quote!(#a * #a),
         UnaryOp::Twice => quote!(2.0 * #a),
-        UnaryOp::Sin => quote!(::twv_model::trig::sin_cos(#a).0),
-        UnaryOp::Cos => quote!(::twv_model::trig::sin_cos(#a).1),
+        UnaryOp::Sin => quote!(::twv_kernels::trig::sin_cos(#a).0),
+        UnaryOp::Cos => quote!(::twv_kernels::trig::sin_cos(#a).1),
         UnaryOp::Tan => quote!(#a.tan()),
         UnaryOp::Asin => quote!(#a.asin()),
         UnaryOp::Acos => quote!(#a.acos()),
@@ -210,7 +210,7 @@ fn dense_with(o: &Output, zero: TokenStream) -> Vec<Vec<TokenStream>> {
 
 /// A lane array of zeros.
 fn lane_zero() -> TokenStream {
-    quote!(::twv_model::lanes::splat(0.0))
+    quote!(::twv_kernels::lanes::splat(0.0))
 }
 
 /// `[e0, e1, ...]` of the rows of a one-column grid.
@@ -261,17 +261,17 @@ pub fn lane_jw_rows(jac: &Output) -> TokenStream {
                 None => lane_zero(),
             };
             let c = index(*c);
-            quote!(::twv_model::lanes::wide::mul(#entry, wl[#c]))
+            quote!(::twv_kernels::lanes::wide::mul(#entry, wl[#c]))
         });
         terms
-            .reduce(|acc, t| quote!(::twv_model::lanes::wide::add(#acc, #t)))
+            .reduce(|acc, t| quote!(::twv_kernels::lanes::wide::add(#acc, #t)))
             .unwrap_or_else(lane_zero)
     });
     quote!([#(#rows),*])
 }
 
 /// `out[k] = Σ_c J[:, c] · w[k][c]` over the columns of ∂f/∂x that have stored entries (in
-/// increasing order), from the stored entries `j`, in the column form of `twv_model::columns`
+/// increasing order), from the stored entries `j`, in the column form of `twv_kernels::columns`
 /// (the interpreter computes the same operations).
 pub fn jw_columns(jac: &Output) -> TokenStream {
     let columns: Vec<(usize, Vec<TokenStream>)> = jac
@@ -281,7 +281,7 @@ pub fn jw_columns(jac: &Output) -> TokenStream {
             let column = entries.into_iter().map(|e| match e {
                 Some(e) => {
                     let e = index(e);
-                    quote!(::twv_model::columns::opaque(j[#e]))
+                    quote!(::twv_kernels::columns::opaque(j[#e]))
                 }
                 None => quote!(zero),
             });
@@ -299,7 +299,7 @@ pub fn jw_columns(jac: &Output) -> TokenStream {
     let first = index(*first);
     let rest_steps = rest.iter().enumerate().map(|(n, (c, _))| {
         let (n, c) = (index(n + 1), index(*c));
-        quote!(::twv_model::columns::add_scaled(&mut acc, &cols[#n], wk[#c]);)
+        quote!(::twv_kernels::columns::add_scaled(&mut acc, &cols[#n], wk[#c]);)
     });
     let ncols = index(columns.len());
     let grid = columns.iter().map(|(_, column)| quote!([#(#column),*]));
@@ -307,13 +307,13 @@ pub fn jw_columns(jac: &Output) -> TokenStream {
         // Opaque entries: otherwise the optimiser treats each lane of a column on its own
         // (structural zeros, entries that are 1 or the negation of another) and turns one
         // vector multiply-add per column into several shuffled scalar and vector operations.
-        let zero = ::twv_model::columns::opaque(0.0);
+        let zero = ::twv_kernels::columns::opaque(0.0);
         let cols: [[f64; #rows]; #ncols] = [#(#grid),*];
         for (wk, ok) in w.iter().zip(out.iter_mut()) {
             // An opaque address: otherwise the optimiser vectorises across the tangent vectors
             // (with gathers and scatters, slower than scalar code) instead of along the columns.
             let wk = ::core::hint::black_box(wk);
-            let mut acc = ::twv_model::columns::scaled(&cols[0], wk[#first]);
+            let mut acc = ::twv_kernels::columns::scaled(&cols[0], wk[#first]);
             #(#rest_steps)*
             *ok = acc;
         }

@@ -5,7 +5,7 @@
 //! Emitted code: one `let` per IR instruction (SSA, in IR order, so the operations and their
 //! order are CasADi's and the interpreter's), fixed-size arrays, no heap, no panics, only the
 //! structural non-zeros of ∂f/∂x, and J·W by the columns that have entries. Every kernel is
-//! built for the x86-64 baseline and for AVX-512, picked at run time (`twv_model::isa`). It
+//! built for the x86-64 baseline and for AVX-512, picked at run time (`twv_kernels::isa`). It
 //! depends on `twv_model` only.
 
 mod body;

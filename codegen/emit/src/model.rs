@@ -362,7 +362,7 @@ fn kernels(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
 }
 
 /// The variational kernel with one tangent vector at `LANES` points in one instruction stream
-/// (`twv_model::lanes`): IR functions `f_jac_x` and `jac_u` and the column-form J·w over lane
+/// (`twv_kernels::lanes`): IR functions `f_jac_x` and `jac_u` and the column-form J·w over lane
 /// arrays, per lane the operations of the one-point kernel, so every lane has its bits.
 fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
     let (nx, nu) = (&p.nx, &p.nu);
@@ -372,12 +372,12 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
     let ju_body = lane_lets(p.function("jac_u")?, p.params);
     let ju_out = lane_matrix_expr(p.output("jac_u", "jac_u")?);
     let params = quote!(
-        x_lanes: &[[f64; #nx]; ::twv_model::lanes::LANES],
-        u_lanes: &[[f64; #nu]; ::twv_model::lanes::LANES],
-        w_lanes: &[[f64; #nx]; ::twv_model::lanes::LANES],
-        f_lanes: &mut [[f64; #nx]; ::twv_model::lanes::LANES],
-        out_lanes: &mut [[f64; #nx]; ::twv_model::lanes::LANES],
-        jac_u_lanes: &mut [[[f64; #nu]; #nx]; ::twv_model::lanes::LANES]
+        x_lanes: &[[f64; #nx]; ::twv_kernels::lanes::LANES],
+        u_lanes: &[[f64; #nu]; ::twv_kernels::lanes::LANES],
+        w_lanes: &[[f64; #nx]; ::twv_kernels::lanes::LANES],
+        f_lanes: &mut [[f64; #nx]; ::twv_kernels::lanes::LANES],
+        out_lanes: &mut [[f64; #nx]; ::twv_kernels::lanes::LANES],
+        jac_u_lanes: &mut [[[f64; #nu]; #nx]; ::twv_kernels::lanes::LANES]
     );
     let args = quote!(x_lanes, u_lanes, w_lanes, f_lanes, out_lanes, jac_u_lanes);
     // Unlike the one-point kernels this body is not built twice: its + − × ÷ are AVX-512
@@ -390,7 +390,7 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
         /// one-point kernel.
         pub fn kernel_variational_lanes(&self, #params) {
             #[cfg(target_arch = "x86_64")]
-            if ::twv_model::isa::avx512() {
+            if ::twv_kernels::isa::avx512() {
                 // SAFETY: `avx512()` is true only when the CPU and the OS support AVX-512F and
                 // AVX-512VL, the features this build was compiled for.
                 return unsafe { self.kernel_variational_lanes_avx512(#args) };
@@ -400,7 +400,7 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
         /// [`Self::kernel_variational_lanes`] one lane after the other through the one-point
         /// kernel: what runs where AVX-512 is missing (public so tests can compare).
         pub fn kernel_variational_lanes_baseline(&self, #params) {
-            for l in 0..::twv_model::lanes::LANES {
+            for l in 0..::twv_kernels::lanes::LANES {
                 self.kernel_variational(
                     &x_lanes[l],
                     &u_lanes[l],
@@ -414,15 +414,15 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx512f,avx512vl")]
         unsafe fn kernel_variational_lanes_avx512(&self, #params) {
-            let xs = ::twv_model::lanes::gather(x_lanes);
-            let us = ::twv_model::lanes::gather(u_lanes);
+            let xs = ::twv_kernels::lanes::gather(x_lanes);
+            let us = ::twv_kernels::lanes::gather(u_lanes);
             #fj_body
-            ::twv_model::lanes::scatter(&#fj_f, f_lanes);
-            let wl = ::twv_model::lanes::gather(w_lanes);
-            ::twv_model::lanes::scatter(&#jw, out_lanes);
+            ::twv_kernels::lanes::scatter(&#fj_f, f_lanes);
+            let wl = ::twv_kernels::lanes::gather(w_lanes);
+            ::twv_kernels::lanes::scatter(&#jw, out_lanes);
             {
                 #ju_body
-                ::twv_model::lanes::scatter_matrix(&#ju_out, jac_u_lanes);
+                ::twv_kernels::lanes::scatter_matrix(&#ju_out, jac_u_lanes);
             }
         }
     })
@@ -430,7 +430,7 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
 
 /// One kernel built twice behind one entry point `name`: `name_baseline` for the target's
 /// baseline instruction set, `name_avx512` for AVX-512F+VL (32 registers, 8-wide J·W columns),
-/// chosen at run time by `twv_model::isa::avx512()`. Both call the same `#[inline(always)]` body,
+/// chosen at run time by `twv_kernels::isa::avx512()`. Both call the same `#[inline(always)]` body,
 /// so both perform the same IEEE operations in the same order: same bits, different speed.
 fn multiversion(
     name: &str,
@@ -451,7 +451,7 @@ fn multiversion(
     quote! {
         #[doc = #doc]
         pub fn #entry(&self, #params) #ret {
-            if ::twv_model::isa::avx512() {
+            if ::twv_kernels::isa::avx512() {
                 // SAFETY: `avx512()` is true only when the CPU and the OS support AVX-512F and
                 // AVX-512VL, the features this build was compiled for.
                 return unsafe { self.#avx512(#args) };
@@ -547,12 +547,12 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
             #[inline]
             fn f_jw_jac_u_lanes(
                 &self,
-                x: &[[f64; #nx]; ::twv_model::lanes::LANES],
-                u: &[[f64; #nu]; ::twv_model::lanes::LANES],
-                w: &[[f64; #nx]; ::twv_model::lanes::LANES],
-                f: &mut [[f64; #nx]; ::twv_model::lanes::LANES],
-                out: &mut [[f64; #nx]; ::twv_model::lanes::LANES],
-                jac_u: &mut [[[f64; #nu]; #nx]; ::twv_model::lanes::LANES],
+                x: &[[f64; #nx]; ::twv_kernels::lanes::LANES],
+                u: &[[f64; #nu]; ::twv_kernels::lanes::LANES],
+                w: &[[f64; #nx]; ::twv_kernels::lanes::LANES],
+                f: &mut [[f64; #nx]; ::twv_kernels::lanes::LANES],
+                out: &mut [[f64; #nx]; ::twv_kernels::lanes::LANES],
+                jac_u: &mut [[[f64; #nu]; #nx]; ::twv_kernels::lanes::LANES],
             ) {
                 self.kernel_variational_lanes(x, u, w, f, out, jac_u);
             }

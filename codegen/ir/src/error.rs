@@ -153,6 +153,14 @@ pub enum ParamProblem {
         kind: String,
         value: f64,
     },
+    #[error("`{field}` = {value:e} is not a plausible {kind}: its magnitude must lie in [{lo:e}, {hi:e}] (SI units)")]
+    Magnitude {
+        field: String,
+        kind: String,
+        value: f64,
+        lo: f64,
+        hi: f64,
+    },
     #[error("inertia `{key}` = {values:?} violates the triangle inequality: component {index} ({value}) exceeds the sum of the other two")]
     Triangle {
         key: String,

@@ -49,7 +49,7 @@ struct Program {
     info: ModelInfo,
     /// The columns of ∂f/∂x with stored entries, increasing, each with the value id in
     /// `f_jac_x` of its entry in every row (`None`: structural zero): the column form of J·W
-    /// that the generated code uses (`twv_model::columns`).
+    /// that the generated code uses (`twv_kernels::columns`).
     jw_columns: Vec<(usize, Vec<Option<usize>>)>,
     work_len: usize,
 }

@@ -6,6 +6,7 @@
 //!   validated by each parameter's kind ([`ParamError`]).
 //! - [`Function::eval`] and [`Interpreted`]: the interpreter, bit-identical to the generated code.
 
+mod consistency;
 mod error;
 mod hash;
 mod infix;
@@ -14,6 +15,7 @@ mod lower;
 pub mod ops;
 mod params;
 mod types;
+mod unique_keys;
 mod validate;
 
 pub use error::{

@@ -106,6 +106,17 @@ fn check_one(p: &Param, value: f64) -> Result<(), ParamProblem> {
             value,
         });
     }
+    let (lo, hi) = p.kind.magnitude_range();
+    let magnitude = value.abs();
+    if magnitude > hi || (magnitude < lo && value != 0.0) {
+        return Err(ParamProblem::Magnitude {
+            field,
+            kind: p.kind.name().into(),
+            value,
+            lo,
+            hi,
+        });
+    }
     Ok(())
 }
 

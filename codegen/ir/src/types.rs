@@ -52,6 +52,19 @@ impl ParamKind {
         }
     }
 
+    /// The magnitudes a value of this kind may have (SI units): wide enough for any vehicle
+    /// from a toy to a truck, narrow enough that a typo such as `m1 = 1e308` is refused rather
+    /// than making every run overflow or crawl.
+    pub fn magnitude_range(self) -> (f64, f64) {
+        match self {
+            ParamKind::Mass => (1e-6, 1e6),
+            ParamKind::Inertia => (1e-9, 1e7),
+            ParamKind::Length => (0.0, 1e3),
+            ParamKind::Gravity => (0.0, 1e3),
+            ParamKind::Other => (0.0, 1e12),
+        }
+    }
+
     /// Whether a value of this kind must be strictly positive.
     pub fn must_be_positive(self) -> bool {
         matches!(
@@ -157,7 +170,7 @@ impl Output {
 
     /// The columns that have stored entries, increasing, each with the CCS index of its stored
     /// entry in every row (`None`: structural zero): the layout of the column-form J·W that the
-    /// generated code and the interpreter share (`twv_model::columns`).
+    /// generated code and the interpreter share (`twv_kernels::columns`).
     pub fn stored_columns(&self) -> Vec<(usize, Vec<Option<usize>>)> {
         self.colind
             .windows(2)

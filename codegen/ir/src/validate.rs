@@ -65,11 +65,13 @@ pub fn parse_ir(text: &str, file: &str) -> Result<Ir, IrError> {
 }
 
 fn parse_inner(text: &str, file: &str) -> Result<Ir, Problem> {
+    serde_json::from_str::<crate::unique_keys::UniqueKeys>(text).map_err(json_problem)?;
     let value: Value = serde_json::from_str(text).map_err(json_problem)?;
     check_format(&value)?;
     let raw: RawIr = serde_json::from_value(value).map_err(|e| Problem::Schema(e.to_string()))?;
     let ir = build(raw, file)?;
     check_hash(text, &ir.hash)?;
+    crate::consistency::check_jacobians(&ir)?;
     Ok(ir)
 }
 

@@ -11,8 +11,8 @@
 //!   `bake` the struct holds its parameters at run time.
 //! - Relative paths are relative to the `CARGO_MANIFEST_DIR` of the crate calling the macro,
 //!   or, when the file is not there, to the nearest parent directory that has it (so paths from
-//!   the workspace root work in every member crate); absolute paths are used as they are. The expansion refers to `::twv_model`, so the calling
-//!   crate depends on `twv-model`.
+//!   the workspace root work in every member crate); absolute paths are used as they are. The expansion refers to `::twv_model` (the traits)
+//!   and `::twv_kernels` (sincos, ISA choice, lanes), so the calling crate depends on both.
 //! - The expansion `include_bytes!`es every file it read, so editing the IR or the baked TOML
 //!   rebuilds the calling crate with the new code.
 //! - Any problem with a file becomes a `compile_error!` naming the file (as written in the call)

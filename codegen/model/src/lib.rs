@@ -13,10 +13,9 @@
 //!   non-finite outputs.
 #![no_std]
 
-pub mod columns;
-pub mod isa;
-pub mod lanes;
-pub mod trig;
+/// Points one lanes kernel evaluates at once ([`Model::f_jw_jac_u_lanes`]); the arithmetic
+/// behind it is `twv_kernels::lanes`.
+pub const LANES: usize = 8;
 
 /// Names and descriptive metadata of a model.
 #[derive(Debug, Clone, Copy)]
@@ -123,20 +122,20 @@ pub trait Model<const NX: usize, const NU: usize> {
         self.jac_u(x, u, jac_u);
     }
 
-    /// [`f_jw_jac_u`](Self::f_jw_jac_u) with one tangent vector at [`lanes::LANES`]
+    /// [`f_jw_jac_u`](Self::f_jw_jac_u) with one tangent vector at [`LANES`]
     /// independent points (`x[l]`, `u[l]`, `w[l]` → `f[l]`, `out[l]`, `jac_u[l]`), for maps over
     /// many points. Every lane gets exactly the bits of the one-point call; the default makes
     /// those calls, generated code evaluates all lanes in one instruction stream.
     fn f_jw_jac_u_lanes(
         &self,
-        x: &[[f64; NX]; lanes::LANES],
-        u: &[[f64; NU]; lanes::LANES],
-        w: &[[f64; NX]; lanes::LANES],
-        f: &mut [[f64; NX]; lanes::LANES],
-        out: &mut [[f64; NX]; lanes::LANES],
-        jac_u: &mut [[[f64; NU]; NX]; lanes::LANES],
+        x: &[[f64; NX]; LANES],
+        u: &[[f64; NU]; LANES],
+        w: &[[f64; NX]; LANES],
+        f: &mut [[f64; NX]; LANES],
+        out: &mut [[f64; NX]; LANES],
+        jac_u: &mut [[[f64; NU]; NX]; LANES],
     ) {
-        for l in 0..lanes::LANES {
+        for l in 0..LANES {
             self.f_jw_jac_u::<1>(
                 &x[l],
                 &u[l],

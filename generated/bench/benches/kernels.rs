@@ -106,7 +106,7 @@ fn main() -> ExitCode {
          ns per call: median ±half the interquartile range; twv kernels: {} build",
         plan.samples,
         plan.sample_time.as_millis(),
-        if twv_model::isa::avx512() {
+        if twv_kernels::isa::avx512() {
             "AVX-512"
         } else {
             "x86-64 baseline"
@@ -129,8 +129,8 @@ fn main() -> ExitCode {
     }
     // The same kernels with their AVX-512 build switched off: what a CPU without AVX-512 gets
     // (and how much of the ratio is the run-time choice of instruction set).
-    if twv_model::isa::avx512() {
-        twv_model::isa::force_baseline(true);
+    if twv_kernels::isa::avx512() {
+        twv_kernels::isa::force_baseline(true);
         println!();
         println!("the same, runtime parameters, AVX-512 build switched off (x86-64 baseline):");
         println!();
@@ -143,25 +143,25 @@ fn main() -> ExitCode {
                 pair.twv, pair.c, pair.ratio.median
             );
         }
-        twv_model::isa::force_baseline(false);
+        twv_kernels::isa::force_baseline(false);
     } else {
         println!();
         println!("(this CPU has no AVX-512F/VL: the table above is the x86-64 baseline build)");
     }
 
     // What each side pays per angle: CasADi's C calls the C library's sin and cos (gcc merges
-    // them into one sincos call); the Rust kernels inline twv_model::trig::sin_cos.
+    // them into one sincos call); the Rust kernels inline twv_kernels::trig::sin_cos.
     let libm = time(plan, || {
         let (s, c) = black_box(pt.x[0]).sin_cos();
         black_box((s, c));
     });
     let inline = time(plan, || {
-        let (s, c) = twv_model::trig::sin_cos(black_box(pt.x[0]));
+        let (s, c) = twv_kernels::trig::sin_cos(black_box(pt.x[0]));
         black_box((s, c));
     });
     println!();
     println!(
-        "reference, sin and cos of one angle: C library {libm} ns, twv_model::trig {inline} ns"
+        "reference, sin and cos of one angle: C library {libm} ns, twv_kernels::trig {inline} ns"
     );
 
     // What a map over many grid points pays per point for its closed-loop stage (one tangent
@@ -178,7 +178,7 @@ fn main() -> ExitCode {
         );
         black_box((&mut f, &mut out, &mut ju));
     });
-    const L: usize = twv_model::lanes::LANES;
+    const L: usize = twv_kernels::lanes::LANES;
     let lanes = time(plan, || {
         let (x, u, w) = ([pt.x; L], [pt.u; L], [pt.w[0]; L]);
         let (mut f, mut out, mut ju) = ([[0.0; NX]; L], [[0.0; NX]; L], [[[0.0; 2]; NX]; L]);

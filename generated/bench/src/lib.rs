@@ -393,7 +393,7 @@ impl Twv for baked::Vehicle8 {
 /// Checks, at the bench point and at `n_random` pseudo-random points, that the generated Rust
 /// (runtime and baked) and CasADi's C agree to 1e-13 relative to the size of the terms behind
 /// each entry ([`magnitude`]; for J·W, Σ_c |J_rc| |w_kc|). Not bit for bit: the Rust kernels
-/// take sin and cos from one inlined reduction (`twv_model::trig`, within 1 ulp of the C
+/// take sin and cos from one inlined reduction (`twv_kernels::trig`, within 1 ulp of the C
 /// library) and multiply by shared reciprocals where CasADi divides (`twv_ir` lowering), and
 /// CasADi's C sums the products of `mtimes` in its own order. The error lists the first
 /// mismatches.

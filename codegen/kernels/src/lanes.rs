@@ -8,7 +8,7 @@
 //! result has the bits of the one-point kernel at point `l`.
 
 /// Points per lane array: one AVX-512 register of doubles.
-pub const LANES: usize = 8;
+pub const LANES: usize = twv_model::LANES;
 
 /// A value at every lane.
 pub type Lanes = [f64; LANES];

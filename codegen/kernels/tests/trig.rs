@@ -1,7 +1,7 @@
-//! `twv_model::trig::sin_cos` against the C library (glibc's sin and cos are correctly rounded
+//! `twv_kernels::trig::sin_cos` against the C library (glibc's sin and cos are correctly rounded
 //! in all but rare cases, so agreeing with them to 1 ulp means an error below ~1.5 ulp).
 
-use twv_model::trig::sin_cos;
+use twv_kernels::trig::sin_cos;
 
 /// Distance in units in the last place between two finite doubles of the same sign region.
 fn ulps(a: f64, b: f64) -> u64 {
@@ -118,8 +118,8 @@ fn symmetries_hold_exactly() {
 fn eight_wide_sin_cos_has_the_bits_of_the_scalar_one() {
     #[cfg(target_arch = "x86_64")]
     {
-        use twv_model::lanes::{wide, LANES};
-        if !twv_model::isa::avx512() {
+        use twv_kernels::lanes::{wide, LANES};
+        if !twv_kernels::isa::avx512() {
             eprintln!("note: no AVX-512F/VL on this CPU, the 8-wide sincos cannot run here");
             return;
         }

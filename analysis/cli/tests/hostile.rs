@@ -1,0 +1,333 @@
+//! Hostile input, by running the real binary: every case ends in bounded time with one clear
+//! line and a non-zero exit — never a hang, an abort, a panic, a NaN printed as a result or a
+//! half-written folder — and an interrupted sweep resumes where it stopped.
+
+mod common;
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use common::{fails_with, twv};
+
+const X8: &str = "0.1,0,0,0,0,0,0,0";
+
+/// Runs the binary, killing it after `limit`: a hang fails the test instead of the CI run.
+fn bounded(args: &[&str], limit: Duration) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_twv"))
+        .args(args)
+        .env_remove("RUST_BACKTRACE")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            panic!("twv {args:?} still running after {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn scratch(name: &str) -> PathBuf {
+    common::scratch("hostile", name)
+}
+
+fn paper_with(dir: &Path, from: &str, to: &str) -> PathBuf {
+    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let text = std::fs::read_to_string(repo.join("vehicles/paper.toml")).unwrap();
+    assert!(text.contains(from));
+    let path = dir.join("vehicle.toml");
+    std::fs::write(&path, text.replace(from, to)).unwrap();
+    path
+}
+
+const SECONDS: Duration = Duration::from_secs(30);
+
+#[test]
+fn absurd_steps_are_refused_up_front() {
+    let out = bounded(&["lyap", "--x0", X8, "--h", "1e-300"], SECONDS);
+    fails_with(&out, &["RK4 steps", "1e9"]);
+    let out = bounded(&["sim", "--h", "1e-300"], SECONDS);
+    fails_with(&out, &["RK4 steps", "1e9"]);
+    // 10⁹ intervals once asked for 64 GB and aborted (exit 134).
+    let out = bounded(&["lyap", "--x0", X8, "--iterations", "1000000000"], SECONDS);
+    fails_with(&out, &["RK4 steps"]);
+    // A sweep of 10¹² points (56 TB of results) is refused before anything is made.
+    let dir = scratch("huge").join("map");
+    let out = bounded(
+        &[
+            "sweep",
+            "--kp",
+            "0:8000:1000000",
+            "--kd",
+            "0:4000:1000000",
+            "--metric",
+            "max-lyapunov",
+            "--out",
+            dir.to_str().unwrap(),
+        ],
+        SECONDS,
+    );
+    fails_with(&out, &["--grid", "1000000000000 points"]);
+    assert!(!dir.exists(), "no folder left behind");
+}
+
+#[test]
+fn absurd_parameters_are_refused_naming_the_field() {
+    let dir = scratch("params");
+    let p = paper_with(&dir, "m1 = 115.0", "m1 = 1e308");
+    for cmd in [
+        vec!["eval", "--x", X8, "--params"],
+        vec!["audit", "--model", "vehicle7", "--params"],
+        vec!["report", "--quick", "--out", "unused", "--params"],
+    ] {
+        let mut args = cmd.clone();
+        args.push(p.to_str().unwrap());
+        let out = bounded(&args, SECONDS);
+        fails_with(&out, &["vehicle.toml", "m1", "plausible mass"]);
+    }
+    assert!(!Path::new("unused").exists());
+}
+
+#[test]
+fn non_finite_results_are_errors() {
+    let out = twv(&["eval", "--model", "lorenz", "--x", "1e308,1e308,1e308"]);
+    let stderr = fails_with(&out, &["f is not finite", "1e308"]);
+    assert!(
+        out.stdout.is_empty(),
+        "nothing printed as a result: {stderr}"
+    );
+}
+
+#[test]
+fn a_full_stdout_is_an_error_not_a_panic() {
+    let full = std::fs::File::options()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    for args in [
+        vec!["eval", "--x", X8],
+        vec!["codegen", "--model", "lorenz"],
+        vec![
+            "lyap",
+            "--model",
+            "lorenz",
+            "--x0",
+            "1,1,20",
+            "--iterations",
+            "10",
+        ],
+        vec!["audit", "--model", "vehicle7", "--samples", "5"],
+        vec!["linear"],
+        vec!["tune"],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_twv"))
+            .args(&args)
+            .stdout(full.try_clone().unwrap())
+            .stderr(Stdio::piped())
+            .output()
+            .unwrap();
+        fails_with(&out, &["cannot write to stdout"]);
+    }
+}
+
+#[test]
+fn a_closed_pipe_ends_quietly() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_twv"))
+        .args(["codegen", "--model", "vehicle8"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Read one line, then hang up, as `| head -1` does.
+    let mut first = [0u8; 64];
+    child
+        .stdout
+        .as_mut()
+        .unwrap()
+        .read_exact(&mut first)
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.is_empty(), "quiet: {stderr}");
+    #[cfg(unix)]
+    {
+        use std::os::unix::process::ExitStatusExt;
+        assert_eq!(
+            out.status.signal(),
+            Some(13),
+            "ended by SIGPIPE like any Unix tool"
+        );
+    }
+}
+
+#[test]
+fn negative_numbers_parse_and_out_of_range_ones_are_named() {
+    fails_with(&twv(&["lyap", "--x0", X8, "--h", "-1"]), &["h = -1"]);
+    fails_with(
+        &twv(&["lyap", "--x0", X8, "--transient", "-5"]),
+        &["transient = -5"],
+    );
+    fails_with(&twv(&["sim", "--t-end", "-2"]), &["t_end", "-2"]);
+    // A negative gain range is a valid map (every point unstable), not a parse error.
+    let dir = scratch("negative").join("map");
+    let out = twv(&[
+        "sweep",
+        "--kp",
+        "-100:100:3",
+        "--kd",
+        "0:1:2",
+        "--metric",
+        "spectral-abscissa",
+        "--out",
+        dir.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn a_failed_run_leaves_no_folder() {
+    let dir = scratch("failed").join("sim");
+    fails_with(
+        &twv(&["sim", "--h", "0.5", "--out", dir.to_str().unwrap()]),
+        &["sample interval"],
+    );
+    assert!(!dir.exists());
+}
+
+#[test]
+fn a_folder_holds_one_sweep() {
+    let dir = scratch("two-sweeps").join("map");
+    let d = dir.to_str().unwrap();
+    let first = twv(&[
+        "sweep",
+        "--kp",
+        "0:2400:5",
+        "--kd",
+        "100:1000:2",
+        "--metric",
+        "spectral-abscissa",
+        "--out",
+        d,
+        "--quiet",
+    ]);
+    assert!(first.status.success());
+    let second = twv(&[
+        "sweep",
+        "--kp",
+        "0:2400:7",
+        "--kd",
+        "100:1000:2",
+        "--metric",
+        "spectral-abscissa",
+        "--out",
+        d,
+        "--quiet",
+    ]);
+    fails_with(&second, &["holds another sweep"]);
+}
+
+/// Ctrl-C in the middle of a shard: exit 130, the finished points in a checkpoint, and the
+/// same command resumes and writes what an uninterrupted run writes.
+#[test]
+fn an_interrupted_sweep_resumes() {
+    let base = scratch("sigint");
+    let grid = [
+        "--kp",
+        "800:8000:16",
+        "--kd",
+        "200:4000:16",
+        "--metric",
+        "max-lyapunov",
+        "--quiet",
+    ];
+    let whole = base.join("whole");
+    let mut args = vec!["sweep", "--out", whole.to_str().unwrap()];
+    args.extend_from_slice(&grid);
+    assert!(bounded(&args, Duration::from_secs(120)).status.success());
+
+    let dir = base.join("interrupted");
+    let mut args = vec!["sweep", "--out", dir.to_str().unwrap()];
+    args.extend_from_slice(&grid);
+    let child = Command::new(env!("CARGO_BIN_EXE_twv"))
+        .args(&args)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(400));
+    let pid = child.id().to_string();
+    assert!(Command::new("kill")
+        .args(["-INT", &pid])
+        .status()
+        .unwrap()
+        .success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("run the same command again to resume"),
+        "{stderr}"
+    );
+    assert!(dir.join("checkpoint-0-of-1.json").exists());
+    assert!(!dir.join("shard-0-of-1.json").exists());
+
+    let resumed = bounded(&args, Duration::from_secs(120));
+    assert!(resumed.status.success());
+    assert_eq!(
+        std::fs::read(dir.join("shard-0-of-1.json")).unwrap(),
+        std::fs::read(whole.join("shard-0-of-1.json")).unwrap()
+    );
+    assert!(!dir.join("checkpoint-0-of-1.json").exists());
+}
+
+#[test]
+fn every_command_takes_quiet_and_prints_no_progress_off_a_terminal() {
+    let out = twv(&[
+        "lyap",
+        "--model",
+        "lorenz",
+        "--x0",
+        "1,1,20",
+        "--iterations",
+        "40000",
+        "--quiet",
+    ]);
+    assert!(out.status.success());
+    assert!(out.stderr.is_empty());
+    // Not a terminal: no bar even for a run of several seconds.
+    let out = twv(&[
+        "lyap",
+        "--model",
+        "lorenz",
+        "--x0",
+        "1,1,20",
+        "--iterations",
+        "40000",
+    ]);
+    assert!(out.status.success());
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for cmd in [
+        "eval", "codegen", "audit", "lyap", "sim", "disturb", "phase", "linear", "tune", "report",
+        "sweep", "merge",
+    ] {
+        let out = twv(&[cmd, "--quiet", "--help"]);
+        assert!(out.status.success(), "{cmd} --quiet");
+    }
+}
