@@ -34,5 +34,8 @@ cargo fmt --all --check
 step "cargo clippy --all-targets -- -D warnings"
 cargo clippy --workspace --all-targets -- -D warnings
 
-step "cargo test"
-cargo test --workspace
+step "cargo nextest (every test binary, in parallel)"
+cargo nextest run --workspace --no-fail-fast
+
+step "cargo test --doc"
+cargo test --workspace --doc
