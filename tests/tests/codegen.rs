@@ -932,14 +932,6 @@ mod parameter_files {
     }
 }
 
-/// `twv_model!` turns every problem with its files into a `compile_error!` naming the file and
-/// the problem: wrong version, unknown op, bad index, truncated JSON, a bad parameter, no file.
-/// The IR fixtures are copies of lorenz.json with one defect each (compile_fail/ir/).
-#[test]
-fn macro_errors_are_compile_errors() {
-    trybuild::TestCases::new().compile_fail("tests/compile_fail/*.rs");
-}
-
 /// Every operation of twv-ir/1, emitted and interpreted, agrees bit for bit (NaN with NaN),
 /// including those no shipped model uses yet. The fixture's output i applies operation i.
 mod all_operations {

@@ -247,9 +247,9 @@ fn an_interrupted_sweep_resumes() {
     let base = scratch("sigint");
     let grid = [
         "--kp",
-        "800:8000:16",
+        "800:8000:12",
         "--kd",
-        "200:4000:16",
+        "200:4000:12",
         "--metric",
         "max-lyapunov",
         "--quiet",

@@ -1,4 +1,0 @@
-// A missing IR file is a compile error naming the file.
-twv_macros::twv_model!(ir = "tests/tests/compile_fail/ir/no_such_file.json", name = Model);
-
-fn main() {}

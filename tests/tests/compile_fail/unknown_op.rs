@@ -1,4 +1,0 @@
-// A malformed IR file is a compile error naming the file and the problem.
-twv_macros::twv_model!(ir = "tests/tests/compile_fail/ir/unknown_op.json", name = Model);
-
-fn main() {}
