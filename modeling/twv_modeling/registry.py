@@ -25,13 +25,18 @@ def build(name: str) -> DerivedModel:
         P, p_vec = vehicle_models.symbols()
         model = derive(vehicle_models.BUILDERS[name](P), P, p_vec)
         source = vehicle_models.PARAMS_SOURCE[name]
-        values = load_values(VEHICLES_DIR / source, model.params)
-        model.params = [_with_default(p, v) for p, v in zip(model.params, values, strict=True)]
-        model.params_source = f"vehicles/{source}"
-        return model
+        return with_defaults_from(model, VEHICLES_DIR / source, f"vehicles/{source}")
     if name in EXPLICIT:
         return load_model_file(EXPLICIT_DIR / f"{name}.py")
     raise UnknownModelError(f"unknown model `{name}` (shipped: {', '.join(SHIPPED)})")
+
+
+def with_defaults_from(model: DerivedModel, path: Path, label: str) -> DerivedModel:
+    """`model` with its parameter defaults read from the vehicle file `path` (named `label`)."""
+    values = load_values(path, model.params)
+    model.params = [_with_default(p, v) for p, v in zip(model.params, values, strict=True)]
+    model.params_source = label
+    return model
 
 
 def build_file(path: Path) -> DerivedModel:

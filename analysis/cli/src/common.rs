@@ -64,15 +64,7 @@ impl Context {
 
     /// The embedded default parameter file of a shipped vehicle, if it has one.
     pub fn vehicle_defaults(&self, model: &str) -> Option<ParamSource> {
-        let (text, file) = match model {
-            "vehicle8" | "vehicle7" => (self.paper, "vehicles/paper.toml"),
-            "segway7" => (self.segway, "vehicles/segway.toml"),
-            _ => return None,
-        };
-        Some(ParamSource::Text {
-            text: text.to_string(),
-            origin: format!("{file} (embedded)"),
-        })
+        twv_analysis::model::vehicle_defaults(model, self.paper, self.segway)
     }
 
     /// The embedded vehicles/paper.toml.

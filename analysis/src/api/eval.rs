@@ -100,3 +100,119 @@ impl ModelTask for Eval<'_> {
 pub fn evaluate(model: &ResolvedModel, settings: &EvalSettings) -> Result<EvalResult> {
     dispatch(model, Eval(settings))
 }
+
+/// What [`evaluate_batch`] computes at each state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    /// ẋ = f(x, u): `nx` numbers per state.
+    F,
+    /// ∂f/∂x, row-major: `nx·nx` per state.
+    JacX,
+    /// ∂f/∂u, row-major: `nx·nu` per state.
+    JacU,
+    /// (∂f/∂x)·v for one tangent vector v per state: `nx` per state.
+    Jw,
+}
+
+impl Quantity {
+    /// Numbers per state.
+    pub fn width(self, nx: usize, nu: usize) -> usize {
+        match self {
+            Quantity::F | Quantity::Jw => nx,
+            Quantity::JacX => nx * nx,
+            Quantity::JacU => nx * nu,
+        }
+    }
+}
+
+/// The rows of a batch: states `x` (row-major, `nx` per state), inputs `u` (`nu` per state, or
+/// empty for zeros) and, for [`Quantity::Jw`], one tangent vector per state in `v`.
+#[derive(Debug, Clone, Copy)]
+pub struct Batch<'a> {
+    /// States, `n·nx` numbers.
+    pub x: &'a [f64],
+    /// Inputs, `n·nu` numbers, or empty: u = 0.
+    pub u: &'a [f64],
+    /// Tangent vectors, `n·nx` numbers (only for `Jw`).
+    pub v: &'a [f64],
+}
+
+struct EvalBatch<'a> {
+    what: Quantity,
+    batch: Batch<'a>,
+    out: &'a mut [f64],
+}
+
+impl ModelTask for EvalBatch<'_> {
+    type Output = ();
+    fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
+        self,
+        model: &M,
+        _: &ResolvedModel,
+    ) -> Result<()> {
+        let nu = model.info().inputs.len();
+        let Batch { x, u, v } = self.batch;
+        let n = x.len() / NX;
+        let width = self.what.width(NX, nu);
+        let sized = |name: &str, got: usize, per: usize| {
+            if got == n * per {
+                Ok(())
+            } else {
+                Err(Error::input(
+                    name,
+                    format!("{got} numbers for {n} states: want {per} per state"),
+                ))
+            }
+        };
+        sized("x", x.len(), NX)?;
+        if !u.is_empty() {
+            sized("u", u.len(), nu)?;
+        }
+        if self.what == Quantity::Jw {
+            sized("v", v.len(), NX)?;
+        }
+        sized("out", self.out.len(), width)?;
+        for (row, out) in self.out.chunks_exact_mut(width.max(1)).enumerate() {
+            let xs: &[f64; NX] = x[row * NX..][..NX].try_into().expect("NX numbers");
+            // An interpreted model may carry padding inputs after its own (see twv_ir).
+            let mut us = [0.0; NU];
+            if !u.is_empty() {
+                us[..nu].copy_from_slice(&u[row * nu..][..nu]);
+            }
+            match self.what {
+                Quantity::F => model.f(xs, &us, out.try_into().expect("NX numbers")),
+                Quantity::JacX => {
+                    let mut j = [[0.0; NX]; NX];
+                    model.jac_x(xs, &us, &mut j);
+                    out.copy_from_slice(j.as_flattened());
+                }
+                Quantity::JacU => {
+                    let mut j = [[0.0; NU]; NX];
+                    model.jac_u(xs, &us, &mut j);
+                    for (o, r) in out.chunks_exact_mut(nu.max(1)).zip(&j) {
+                        o.copy_from_slice(&r[..nu]);
+                    }
+                }
+                Quantity::Jw => {
+                    let w: [[f64; NX]; 1] = [v[row * NX..][..NX].try_into().expect("NX numbers")];
+                    let mut o = [[0.0; NX]; 1];
+                    model.jw::<1>(xs, &us, &w, &mut o);
+                    out.copy_from_slice(&o[0]);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Evaluates `what` at every state of `batch` into `out` (`n ·` [`Quantity::width`] numbers),
+/// one dispatch for the whole batch and no allocation per state. The caller checks the inputs
+/// for NaN (it knows their names); outputs are written as computed.
+pub fn evaluate_batch(
+    model: &ResolvedModel,
+    what: Quantity,
+    batch: Batch<'_>,
+    out: &mut [f64],
+) -> Result<()> {
+    dispatch(model, EvalBatch { what, batch, out })
+}

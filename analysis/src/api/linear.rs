@@ -2,7 +2,7 @@
 //! that loop is stable — its margins, and an LQR design for comparison: `twv linear`.
 
 use nalgebra::{Complex, DMatrix};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use twv_model::{Model, ModelInfo};
 
 use crate::control::Plant;
@@ -18,7 +18,8 @@ use crate::model::{dispatch, state_vector, ModelTask, ResolvedModel};
 pub const LQR_STATES: [&str; 4] = ["phi", "x", "w_y", "v_x"];
 
 /// Where to linearise.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum At {
     /// Everything zero: the pendulum upright at rest.
     #[default]
@@ -31,7 +32,8 @@ pub enum At {
 
 /// What to analyse. Defaults: upright, the study's PD, no lag or delay, LQR weights Q = I,
 /// R = 1e-4 I.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct LinearSettings {
     /// The operating point.
     pub at: At,

@@ -14,10 +14,13 @@
 //! | linear | [`LinearSettings`] | [`analyse`] | [`LinearReport`] |
 //! | tune | [`TuneSettings`] | [`tune_model`] | [`TuneReport`] |
 //! | sweep | [`SweepSettings`] | [`sweep()`], [`run_shard`] | points, [`ShardOutcome`] |
+//!
+//! [`json`] runs any of them with settings and result as JSON (the Python package, the page).
 
 mod audit;
 mod codegen;
 mod eval;
+pub mod json;
 mod linear;
 mod phase;
 mod simulate;
@@ -28,7 +31,7 @@ mod tune;
 pub use crate::progress::{CancelFlag, Progress, Silent};
 pub use audit::{audit_model, AUDITED, MAX_SAMPLES};
 pub use codegen::{camel, generate, CodegenSettings};
-pub use eval::{evaluate, EvalResult, EvalSettings};
+pub use eval::{evaluate, evaluate_batch, Batch, EvalResult, EvalSettings, Quantity};
 pub use linear::{
     analyse, complex, equilibrium_tolerance, pitch_loop, At, LinearReport, LinearSettings,
     LoopVerdict, PhaseMargin, PitchReport, StableMargins, LQR_STATES,

@@ -1,7 +1,7 @@
 //! One closed-loop run of the PID pitch controller — a tilt recovery or a maneuver — with its
 //! time series, metrics and whether it recovered: `twv sim` and `twv disturb`.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use twv_model::Model;
 
 use crate::control::{
@@ -24,7 +24,8 @@ pub const MANEUVER_V_LOOP: (f64, f64) = (0.08, 0.03);
 pub const RECOVERED_PHI: f64 = 0.002;
 
 /// A closed-loop run to simulate.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct SimSettings {
     /// A title for tables and figures.
     pub title: String,

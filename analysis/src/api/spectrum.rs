@@ -2,7 +2,7 @@
 
 use std::time::Instant;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use twv_model::Model;
 
 use crate::control::{ControllerSettings, PidLoop, Plant};
@@ -18,7 +18,8 @@ use crate::progress::Progress;
 
 /// What to compute. Defaults: the study's preset from rest... (`x0` must be given), u = 0,
 /// open loop, the full spectrum.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct SpectrumSettings {
     /// Initial model state, in the model's state order (controller states start at 0).
     pub x0: Vec<f64>,

@@ -31,20 +31,30 @@ pub const MAX_POINTS: usize = 10_000_000;
 
 /// What to map. Defaults: the study's sampling after a tilt of 0.1 rad, the study's
 /// controller apart from the swept gains.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SweepSettings {
     /// The (Kp, Kd[, Ki]) grid.
     pub grid: Grid,
     /// What to map.
     pub metric: Metric,
     /// Initial model state of the nonlinear metrics; `None`: at rest with Φ = `tilt`.
+    #[serde(default)]
     pub x0: Option<Vec<f64>>,
     /// Initial tilt of the nonlinear metrics [rad]. Default 0.1.
+    #[serde(default = "default_tilt")]
     pub tilt: f64,
     /// The controller apart from the gains (setpoint, saturation, outer loops).
+    #[serde(default)]
     pub controller: ControllerSettings,
     /// The metrics' numerical settings.
+    #[serde(default)]
     pub metric_settings: MetricSettings,
+}
+
+/// The default initial tilt of the nonlinear metrics [rad].
+fn default_tilt() -> f64 {
+    0.1
 }
 
 impl SweepSettings {
@@ -54,7 +64,7 @@ impl SweepSettings {
             grid,
             metric,
             x0: None,
-            tilt: 0.1,
+            tilt: default_tilt(),
             controller: ControllerSettings::default(),
             metric_settings: MetricSettings::default(),
         }

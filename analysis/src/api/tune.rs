@@ -1,7 +1,7 @@
 //! Pitch-loop gains fitted to a margin specification with Clarabel, with the independent
 //! certificate and a tilt recovery on the nonlinear model: `twv tune`.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use twv_model::Model;
 
 use super::linear::pitch_loop;
@@ -13,7 +13,8 @@ use crate::model::{dispatch, ModelTask, ResolvedModel};
 use crate::tune::{tune, Spec, TuneOptions, TuneResult, TuneStatus};
 
 /// What to tune. Defaults: `dpm>=45`, a PD with the smallest gains that meet it.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct TuneSettings {
     /// The specification.
     pub spec: Spec,

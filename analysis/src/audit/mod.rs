@@ -20,7 +20,8 @@ use twv_model::Mechanical;
 use crate::hand_model::VehicleParams;
 
 /// Settings of an audit, defaults beside each field.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct AuditSettings {
     /// Random samples (after the upright and hanging rest states). Default 200.
     pub samples: usize,

@@ -1,7 +1,7 @@
 //! Reference signals of the outer loops: piecewise-linear profiles r(t), e.g. the maneuver's
 //! forward-velocity reference (start, accelerate, cruise, decelerate, stop).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::error::ControlError;
 
@@ -11,9 +11,24 @@ use super::error::ControlError;
 /// The reference depends on time only, so it adds nothing to the closed-loop Jacobian in x; its
 /// kinks make the vector field non-smooth in t, which RK4 and DOPRI handle with a local error
 /// of lower order at the kink (negligible at the default steps).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "ProfilePoints")]
 pub struct Profile {
     points: Vec<(f64, f64)>,
+}
+
+/// A profile as written in settings, checked by [`Profile::new`] when read.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProfilePoints {
+    points: Vec<(f64, f64)>,
+}
+
+impl TryFrom<ProfilePoints> for Profile {
+    type Error = ControlError;
+    fn try_from(p: ProfilePoints) -> Result<Self, ControlError> {
+        Profile::new("reference", p.points)
+    }
 }
 
 impl Profile {
@@ -22,6 +37,11 @@ impl Profile {
         Self {
             points: vec![(0.0, value)],
         }
+    }
+
+    /// The constant 0 (a reference left out of the settings).
+    pub fn zero() -> Self {
+        Self::constant(0.0)
     }
 
     /// Through `points` (at least one; finite; strictly increasing times).

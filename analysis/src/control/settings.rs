@@ -1,15 +1,15 @@
 //! What the controller is: the PID pitch loop and the optional outer loops, with defaults beside
 //! each field and a `validate()` that runs before any work.
 
-use serde::{Serialize, Serializer};
+use serde::{Deserialize, Serialize, Serializer};
 
 use super::error::{check, ControlError};
 use super::reference::Profile;
 use crate::linear::PidGains;
 
 /// The pitch setpoint Φ_ref of the inner loop (before the velocity loop adds its lean).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Setpoint {
     /// Φ_ref = 0: upright.
     Zero,
@@ -56,8 +56,8 @@ impl Setpoint {
 }
 
 /// How the integral state is kept from winding up while the force saturates.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum AntiWindup {
     /// None: the integral runs on while saturated.
     None,
@@ -82,7 +82,8 @@ pub enum AntiWindup {
 /// Sign (DESIGN §2): Φ > 0 is a forward lean and F1 > 0 pushes the base forward, so the base
 /// must push *towards* the lean: F = +Kp Φ + Kd Φ̇ stabilises the upright iff Kd > 0 and
 /// Kp > M_x g (Routh–Hurwitz, [`crate::linear::CartPendulum::routh_hurwitz_stable`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct PitchPid {
     /// Gains (N/rad, N/(rad s), N s/rad). Default the study's PD (3860, 0, 1980).
     #[serde(serialize_with = "ser_gains")]
@@ -124,33 +125,38 @@ impl Default for PitchPid {
 /// under a leaning pendulum), so the lean grows with the velocity shortfall: kp, ki ≥ 0. In
 /// terms of the force this is F ∋ +Kp·kp·v_x, the "positive" velocity feedback every
 /// cart–pendulum regulator has; the linearised loop needs 0 < Kp·kp < m_p l Kd / I_p.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct VelocityLoop {
     /// Proportional gain [rad per m/s].
     pub kp: f64,
     /// Integral gain [rad per m]; 0: no integral state.
     pub ki: f64,
-    /// Forward-velocity reference v_ref(t) [m/s].
+    /// Forward-velocity reference v_ref(t) [m/s]. Default 0.
+    #[serde(default = "Profile::zero")]
     pub reference: Profile,
     /// Largest lean the loop may ask for, |kp·e_v + ki·∫e_v| ≤ lean_max [rad]; its integral
     /// stops while the limit holds and the error pushes further (conditional anti-windup).
     /// Without it a large velocity step asks for a lean whose recovery force saturates the
     /// motor and the vehicle falls.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lean_max: Option<f64>,
 }
 
 /// Outer loop on the yaw rate: T = kp (r_ref − w_z), on T2 (or as differential wheel torque).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct YawLoop {
     /// Proportional gain [N m per rad/s] (> 0).
     pub kp: f64,
-    /// Yaw-rate reference r_ref(t) [rad/s].
+    /// Yaw-rate reference r_ref(t) [rad/s]. Default 0.
+    #[serde(default = "Profile::zero")]
     pub reference: Profile,
 }
 
 /// The whole controller. Default: the study's PD with its 0.03·sin Φ setpoint, no outer loops.
-#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct ControllerSettings {
     /// The pitch loop.
     pub pitch: PitchPid,

@@ -1,7 +1,7 @@
 //! Running a vector field over a time span and keeping samples: the closed-loop and open-loop
 //! simulations behind `twv sim`, `twv phase` and `twv disturb`.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::error::ControlError;
 use crate::integrate::{Dopri5, Rk4, Stepper, VectorField};
@@ -12,7 +12,8 @@ use crate::progress::Progress;
 pub const MAX_SAMPLES: f64 = 2e6;
 
 /// How long and how finely to run. Defaults are beside each field.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct RunSettings {
     /// End time [s]. Default 10.
     pub t_end: f64,

@@ -16,7 +16,8 @@ use super::modes::{eigenvalues, spectral_abscissa, zero_tolerance};
 use super::siso::{HiddenPart, SisoPlant};
 
 /// PID gains of F = Kp Φ + Ki ∫Φ + Kd Φ̇ (N/rad, N/(rad s), N s/rad for a force input).
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct PidGains {
     /// Proportional gain.
     pub kp: f64,
@@ -38,7 +39,8 @@ impl PidGains {
 }
 
 /// What sits between the controller and the vehicle.
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct LoopOptions {
     /// First-order actuator lag time constant τ (s); 0 = none.
     pub lag: f64,

@@ -84,6 +84,22 @@ pub struct ResolvedModel {
     pub params_origin: String,
 }
 
+/// The default parameter source of a shipped vehicle: `paper` (the text of vehicles/paper.toml)
+/// for vehicle8 and vehicle7, `segway` (vehicles/segway.toml) for segway7, `None` for the other
+/// models (their IR defaults). Front ends embed the two files themselves, so that editing one
+/// rebuilds only the front end, not this library.
+pub fn vehicle_defaults(model: &str, paper: &str, segway: &str) -> Option<ParamSource> {
+    let (text, file) = match model {
+        "vehicle8" | "vehicle7" => (paper, "vehicles/paper.toml"),
+        "segway7" => (segway, "vehicles/segway.toml"),
+        _ => return None,
+    };
+    Some(ParamSource::Text {
+        text: text.to_string(),
+        origin: format!("{file} (embedded)"),
+    })
+}
+
 /// The names of the shipped models.
 pub fn shipped_models() -> Vec<&'static str> {
     twv_generated::MODELS.iter().map(|(n, _)| *n).collect()
@@ -185,6 +201,47 @@ impl ResolvedModel {
         let mut x = vec![0.0; self.ir.nx()];
         x[i] = value;
         Ok(x)
+    }
+
+    /// This model with some parameters set by TOML key (`m2`, or `I2` with all its components),
+    /// checked like a parameter file's values; errors name the key. `origin` describes where the
+    /// values came from, for messages and reports.
+    pub fn with_overrides(&self, overrides: &[(String, Vec<f64>)], origin: &str) -> Result<Self> {
+        let params = self.ir.params();
+        let mut values = self.params.clone();
+        for (key, given) in overrides {
+            let slots: Vec<usize> = (0..params.len())
+                .filter(|&i| params[i].key == *key)
+                .collect();
+            if slots.is_empty() {
+                let mut known: Vec<&str> = params.iter().map(|p| p.key.as_str()).collect();
+                known.dedup();
+                return Err(Error::input(
+                    "params",
+                    format!("unknown parameter `{key}` (known: {})", known.join(", ")),
+                ));
+            }
+            if given.len() != slots.len() {
+                return Err(Error::input(
+                    "params",
+                    format!(
+                        "`{key}` has {} component(s), {} given",
+                        slots.len(),
+                        given.len()
+                    ),
+                ));
+            }
+            for (&i, &v) in slots.iter().zip(given) {
+                values[i] = v;
+            }
+        }
+        let label = format!("{origin} (over {})", self.params_origin);
+        twv_ir::check_values(&values, &label, params)?;
+        Ok(Self {
+            params: values,
+            params_origin: label,
+            ..self.clone()
+        })
     }
 
     /// Whether the model runs on generated code.

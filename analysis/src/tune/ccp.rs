@@ -20,7 +20,8 @@ use crate::linear::disk::Disk;
 use crate::linear::pitch::{LoopOptions, PidGains, PitchLoop};
 
 /// What the tuner optimises once the spec holds.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Objective {
     /// Closest gains to a target (scaled least squares): `--target Kp,Kd`.
     Target(PidGains),

@@ -9,7 +9,8 @@ use crate::linear::disk::{alpha_from_gain, alpha_from_phase_deg, Disk};
 use crate::linear::margins::Margins;
 
 /// One margin requirement.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum Requirement {
     /// Balanced disk phase margin ≥ `deg` degrees (`dpm>=45`); 0 < deg < 90.
     DiskPhase {
@@ -35,11 +36,32 @@ pub enum Requirement {
     },
 }
 
-/// A conjunction of requirements.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+/// A conjunction of requirements. Read from settings as the spec text (`"dpm>=45,dgm>=6dB"`)
+/// or in the structured form it is written in; either way through [`FromStr`], which checks
+/// the ranges.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "SpecInput")]
 pub struct Spec {
     /// All must hold.
     pub requirements: Vec<Requirement>,
+}
+
+/// The two ways settings write a spec.
+#[derive(serde::Deserialize)]
+#[serde(untagged)]
+enum SpecInput {
+    Text(String),
+    Structured { requirements: Vec<Requirement> },
+}
+
+impl TryFrom<SpecInput> for Spec {
+    type Error = SpecError;
+    fn try_from(input: SpecInput) -> Result<Self, SpecError> {
+        match input {
+            SpecInput::Text(text) => text.parse(),
+            SpecInput::Structured { requirements } => Spec { requirements }.to_string().parse(),
+        }
+    }
 }
 
 /// A specification string that cannot be read.

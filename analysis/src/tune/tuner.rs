@@ -33,7 +33,8 @@ pub enum TuneStatus {
 }
 
 /// Tuning settings.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct TuneOptions {
     /// Tune a PID (Ki free) instead of a PD.
     pub pid: bool,
