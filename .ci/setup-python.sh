@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Create (once) the git-ignored virtual environment .venv/ with the pinned modeling tools and the
-# twv_modeling package importable from modeling/. Idempotent; re-installs when the pins change.
+# Create (once) the git-ignored virtual environment .venv/ with the pinned modeling tools, the
+# twv_modeling package importable from modeling/, and the tools that build and test the twv
+# Python package (python/requirements.txt). Idempotent; re-installs when the pins change.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 venv="$root/.venv"
@@ -8,11 +9,13 @@ stamp="$venv/.twv-requirements"
 if [[ ! -x "$venv/bin/python" ]]; then
     python3 -m venv "$venv"
 fi
-if ! cmp -s "$root/modeling/requirements.txt" "$stamp" 2>/dev/null; then
-    "$venv/bin/python" -m pip install --quiet --disable-pip-version-check -r "$root/modeling/requirements.txt"
+pins="$(cat "$root/modeling/requirements.txt" "$root/python/requirements.txt")"
+if [[ "$pins" != "$(cat "$stamp" 2>/dev/null)" ]]; then
+    "$venv/bin/python" -m pip install --quiet --disable-pip-version-check \
+        -r "$root/modeling/requirements.txt" -r "$root/python/requirements.txt"
     # Make twv_modeling importable from the source tree (what an editable install does, without
     # needing a build backend).
     site="$("$venv/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
     echo "$root/modeling" > "$site/twv_modeling.pth"
-    cp "$root/modeling/requirements.txt" "$stamp"
+    printf '%s' "$pins" > "$stamp"
 fi

@@ -3,7 +3,7 @@
 # (fmt, clippy, tests). Installs what it needs itself (.venv/ with pinned versions).
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-step() { printf '\n== %s\n' "$*"; }
+step() { printf '\n== %s  [%ds]\n' "$*" "$SECONDS"; }
 
 step "machine"
 # Which kernels the bit-for-bit ISA tests can compare here (they say so when they cannot).
@@ -19,8 +19,8 @@ bash .ci/setup-python.sh
 py=.venv/bin/python
 
 step "ruff"
-.venv/bin/ruff check modeling analysis/benches
-.venv/bin/ruff format --check modeling analysis/benches
+.venv/bin/ruff check modeling analysis/benches python
+.venv/bin/ruff format --check modeling analysis/benches python
 
 step "pytest modeling/"
 "$py" -m pytest -q modeling/tests
@@ -34,8 +34,16 @@ cargo fmt --all --check
 step "cargo clippy --all-targets -- -D warnings"
 cargo clippy --workspace --all-targets -- -D warnings
 
+# The dev profile for the tests too (not cargo's separate `test` profile), so that the Python
+# extension below reuses every compiled crate instead of building them all again.
 step "cargo nextest (every test binary, in parallel)"
-cargo nextest run --workspace --no-fail-fast
+cargo nextest run --workspace --cargo-profile dev --no-fail-fast
 
 step "cargo test --doc"
-cargo test --workspace --doc
+cargo test --workspace --doc --profile dev
+
+step "python package: build the extension into .venv (maturin), pytest python/tests"
+VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --quiet -m python/Cargo.toml
+TWV_BIN="$PWD/target/debug/twv" "$py" -m pytest -q -p no:cacheprovider python/tests
+
+step "done"

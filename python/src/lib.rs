@@ -1,0 +1,192 @@
+//! `twv._native`: the twv-analysis API for Python. A [`Model`] evaluates f and its Jacobians on
+//! NumPy batches in Rust; every analysis runs through `twv_analysis::api::json` (settings and
+//! result as JSON, the CLI's own serialisation). The Python package (python/twv) gives these
+//! keyword arguments, result objects and docstrings; nothing here parses arguments.
+//!
+//! Long jobs run on a worker thread while the calling thread, without the GIL, waits for the
+//! result and looks for Ctrl-C between waits (raising the job's cancel flag); a panic of the
+//! worker comes back as an exception, never across into Python. Each call has its own thread
+//! pool, so a forked process (a fork-based process pool) computes as the parent does.
+
+mod errors;
+mod model;
+
+use std::sync::mpsc;
+use std::time::Duration;
+
+use pyo3::prelude::*;
+use twv_analysis::api::json;
+use twv_analysis::api::{CancelFlag, Progress};
+
+pub use errors::{to_py, InputError, ModelError, NumericalError, TwvError};
+pub use model::Model;
+
+/// The embedded default vehicle files, as in the `twv` binary.
+pub const PAPER_TOML: &str = include_str!("../../vehicles/paper.toml");
+/// See [`PAPER_TOML`].
+pub const SEGWAY_TOML: &str = include_str!("../../vehicles/segway.toml");
+
+/// How often the waiting thread looks for Ctrl-C.
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
+/// A job's view of the cancel flag the waiting thread raises on Ctrl-C.
+struct Flag<'a>(&'a CancelFlag);
+
+impl Progress for Flag<'_> {
+    fn cancelled(&self) -> bool {
+        self.0.is_raised()
+    }
+}
+
+/// Runs `job` on a worker thread, releasing the GIL; Ctrl-C cancels it at its next chunk
+/// boundary and raises KeyboardInterrupt.
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    job: impl FnOnce(&dyn Progress) -> twv_analysis::Result<T> + Send,
+) -> PyResult<T> {
+    let flag = CancelFlag::new();
+    let mut interrupt: Option<PyErr> = None;
+    let outcome = std::thread::scope(|scope| {
+        let (done, wait) = mpsc::channel();
+        let flag = &flag;
+        let worker = scope.spawn(move || {
+            // A pool of this call's own, not rayon's global one: in a process forked after an
+            // earlier call (a fork-based process pool) the global pool's threads are gone and
+            // work queued to it would wait for ever.
+            let out = match rayon::ThreadPoolBuilder::new().build() {
+                Ok(pool) => pool.install(|| job(&Flag(flag))),
+                Err(e) => Err(twv_analysis::Error::input("threads", e.to_string())),
+            };
+            // The receiver lives until the join below.
+            let _ = done.send(());
+            out
+        });
+        let mut wait = wait;
+        loop {
+            // The receiver moves into the GIL-free wait and back (it is Send, not Sync).
+            let (finished, back) = py.detach(move || {
+                let finished = match wait.recv_timeout(SIGNAL_POLL) {
+                    Ok(()) | Err(mpsc::RecvTimeoutError::Disconnected) => true,
+                    Err(mpsc::RecvTimeoutError::Timeout) => false,
+                };
+                (finished, wait)
+            });
+            wait = back;
+            if finished {
+                break;
+            }
+            if interrupt.is_none() {
+                if let Err(e) = py.check_signals() {
+                    flag.raise();
+                    interrupt = Some(e);
+                }
+            }
+        }
+        py.detach(|| worker.join())
+    });
+    match outcome {
+        Ok(result) => match (result, interrupt) {
+            (Err(twv_analysis::Error::Interrupted), Some(e)) => Err(e),
+            (result, _) => result.map_err(to_py),
+        },
+        Err(panic) => Err(errors::panicked(panic)),
+    }
+}
+
+/// Runs the analysis `job` (spectrum, simulate, linear, tune, sweep, audit) on `model` with
+/// `settings` (a JSON object); returns the result as JSON and its time series as CSV (or None).
+#[pyfunction]
+fn run(
+    py: Python<'_>,
+    job: &str,
+    model: &Model,
+    settings: &str,
+) -> PyResult<(String, Option<String>)> {
+    let resolved = model.resolved();
+    let out = interruptible(py, |progress| json::run(job, resolved, settings, progress))?;
+    Ok((out.result, out.csv))
+}
+
+/// The points `start..stop` of a sweep, as JSON (a shard for an executor).
+#[pyfunction]
+fn sweep_range(
+    py: Python<'_>,
+    model: &Model,
+    settings: &str,
+    start: usize,
+    stop: usize,
+) -> PyResult<String> {
+    let resolved = model.resolved();
+    interruptible(py, |progress| {
+        json::sweep_range(resolved, settings, start..stop, progress)
+    })
+}
+
+/// The number of points of a sweep's grid.
+#[pyfunction]
+fn sweep_len(model: &Model, settings: &str) -> PyResult<usize> {
+    json::sweep_len(model.resolved(), settings).map_err(to_py)
+}
+
+/// The default settings of a job, as JSON.
+#[pyfunction]
+fn default_settings(job: &str) -> PyResult<String> {
+    json::default_settings(job).map_err(to_py)
+}
+
+/// The shipped models' names.
+#[pyfunction]
+fn shipped_models() -> Vec<&'static str> {
+    twv_analysis::model::shipped_models()
+}
+
+/// Builds the study's report into `out` (index.html, figures, data, results.json) from the
+/// embedded vehicle files or the parameter file `params`; returns results.json's text.
+#[pyfunction]
+#[pyo3(signature = (out, *, params = None, quick = false))]
+fn report(
+    py: Python<'_>,
+    out: std::path::PathBuf,
+    params: Option<std::path::PathBuf>,
+    quick: bool,
+) -> PyResult<String> {
+    use twv_analysis::model::{vehicle_defaults, ParamSource};
+    use twv_analysis::report::{build, ReportSettings};
+    let settings = match params {
+        Some(p) => ReportSettings {
+            params: ParamSource::File(p),
+            quick,
+            ..ReportSettings::default()
+        },
+        None => ReportSettings {
+            params: vehicle_defaults("vehicle8", PAPER_TOML, SEGWAY_TOML).unwrap_or_default(),
+            segway_params: vehicle_defaults("segway7", PAPER_TOML, SEGWAY_TOML),
+            params_text: Some(PAPER_TOML.to_string()),
+            quick,
+            ..ReportSettings::default()
+        },
+    };
+    interruptible(py, |progress| {
+        let report = build(&settings, progress)?;
+        report.files.write(&out)?;
+        serde_json::to_string_pretty(&report.results)
+            .map_err(|e| twv_analysis::Error::input("result", e.to_string()))
+    })
+}
+
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add_class::<Model>()?;
+    m.add("TwvError", py.get_type::<TwvError>())?;
+    m.add("InputError", py.get_type::<InputError>())?;
+    m.add("ModelError", py.get_type::<ModelError>())?;
+    m.add("NumericalError", py.get_type::<NumericalError>())?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_range, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_len, m)?)?;
+    m.add_function(wrap_pyfunction!(default_settings, m)?)?;
+    m.add_function(wrap_pyfunction!(shipped_models, m)?)?;
+    m.add_function(wrap_pyfunction!(report, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,156 @@
+"""Every analysis from Python equals the CLI's JSON for the same inputs, bit for bit (JSON
+numbers are shortest round-trip decimals, so equal dicts mean equal doubles)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from conftest import REPO, cli_json, twv_binary
+
+import twv
+
+X0 = [0.1, 0, 0, 0, 0, 0, 0, 0]
+X0_ARG = "0.1,0,0,0,0,0,0,0"
+IR7 = REPO / "generated" / "ir" / "vehicle7.json"
+
+
+def test_spectrum_shipped(vehicle8, tmp_path):
+    # --out records the running estimates, as the Python call does by default.
+    cli = cli_json(
+        "lyap", "--model", "vehicle8", "--preset", "paper", "--x0", X0_ARG, "--out", str(tmp_path)
+    )
+    py = twv.lyapunov_spectrum(vehicle8, X0, preset="paper")
+    assert py.raw == cli
+    # The running estimates are the CLI's running.csv, to the last bit.
+    csv = np.loadtxt(tmp_path / "running.csv", delimiter=",", skiprows=1)
+    assert np.array_equal(py.running, csv[:, 1:9])
+    assert np.array_equal(py.t, csv[:, 0])
+
+
+def test_spectrum_interpreted_ir_closed_loop_dopri():
+    model = twv.Model(ir=IR7)
+    assert model.engine == "interpreted"
+    cli = cli_json(
+        "lyap",
+        "--ir",
+        str(IR7),
+        "--x0",
+        "0.05,0,0,0,0,0,0",
+        "--gains",
+        "3000,100,1500",
+        "--f-max",
+        "400",
+        "--integrator",
+        "dopri",
+        "--rtol",
+        "1e-8",
+        "--iterations",
+        "30",
+        "--k",
+        "3",
+        "--seed",
+        "7",
+    )
+    py = twv.lyapunov_spectrum(
+        model,
+        [0.05, 0, 0, 0, 0, 0, 0],
+        controller=twv.pid(3000, 1500, 100, f_max=400),
+        integrator_kind="dopri",
+        rtol=1e-8,
+        iterations=30,
+        k=3,
+        seed=7,
+        running=False,
+    )
+    assert py.raw == cli
+
+
+@pytest.mark.parametrize("direction", ["forward", "backward"])
+def test_disturb(vehicle8, direction):
+    cli = cli_json("disturb", "--direction", direction, "--tilt", "0.15")
+    py = twv.disturb(vehicle8, direction, 0.15)
+    assert py.raw == cli
+    assert py.recovered == (cli["recovery"] == "recovered")
+
+
+def test_sim_with_outer_loops(vehicle8):
+    cli = cli_json(
+        "sim",
+        "--x0",
+        X0_ARG,
+        "--gains",
+        "3860,50,1980",
+        "--v-loop",
+        "0.08,0.03",
+        "--v-ref",
+        "0.5",
+        "--yaw-kp",
+        "20",
+        "--yaw-ref",
+        "0.1",
+        "--t-end",
+        "6",
+    )
+    py = twv.simulate(
+        vehicle8,
+        X0,
+        controller=twv.pid(3860, 1980, 50, v_loop=(0.08, 0.03), v_ref=0.5, yaw_kp=20, yaw_ref=0.1),
+        t_end=6,
+    )
+    assert py.raw["end"] == cli["end"] and py.raw["metrics"] == cli["metrics"]
+    assert {k: v for k, v in py.raw.items() if k not in ("title", "scenario")} == {
+        k: v for k, v in cli.items() if k not in ("title", "scenario")
+    }
+
+
+def test_linear_margins_lqr(vehicle8):
+    cli = cli_json("linear", "--gains", "3000,0,1200", "--actuator-lag", "0.01", "--delay", "0.005")
+    py = twv.linearize(vehicle8, gains=(3000, 0, 1200), lag=0.01, delay=0.005)
+    assert py.raw == cli
+    assert (
+        twv.margins(vehicle8, gains=(3000, 0, 1200), lag=0.01, delay=0.005)
+        == cli["pitch"]["margins"]
+    )
+
+
+@pytest.mark.parametrize("spec", ["dpm>=60", "dgm>=6dB,ms<=2"])
+def test_tune(vehicle8, spec):
+    cli = cli_json("tune", "--spec", spec)
+    py = twv.tune(vehicle8, spec)
+    assert py.raw == cli
+    assert py.met == (cli["verdict"] == "met")
+
+
+def test_audit():
+    cli = cli_json("audit", "--model", "vehicle7", "--samples", "20")
+    py = twv.audit(twv.Model("vehicle7"), samples=20)
+    assert [py.raw] == cli or py.raw == cli
+
+
+def test_sweep_equals_the_shard_file(vehicle8, tmp_path):
+    import subprocess
+
+    subprocess.run(
+        [
+            str(twv_binary()),
+            "sweep",
+            "--kp",
+            "0:8000:6",
+            "--kd",
+            "0:4000:5",
+            "--metric",
+            "max-lyapunov",
+            "--out",
+            str(tmp_path),
+            "--quiet",
+        ],
+        check=True,
+    )
+    shard = json.loads((tmp_path / "shard-0-of-1.json").read_text())
+    py = twv.sweep(vehicle8, kp=(0, 8000, 6), kd=(0, 4000, 5), metric="max-lyapunov")
+    assert py.points == shard["points"]
+    assert py.value.shape == (1, 5, 6)
+    # Statuses: a fall below the critical Kp, an exponent above it.
+    assert (py.status[0, :, 0] == "fell").all()

@@ -1,0 +1,70 @@
+"""twv: two-wheeled vehicle dynamics, from bodies and joints to spectra, maps and tuned gains.
+
+    import twv
+    m = twv.Model("vehicle8", params={"m2": 10.0})
+    s = twv.lyapunov_spectrum(m, [0.1, 0, 0, 0, 0, 0, 0, 0], preset="paper")
+    r = twv.disturb(m, "forward", 0.1)
+    g = twv.tune(m, "dpm>=60")
+    mp = twv.sweep(m, kp=(0, 8000, 50), kd=(0, 4000, 50))
+
+The derivation (CasADi) is `twv.modeling`; `twv.derive` turns a description into a Model. The
+numerics run in Rust (twv._native); results equal the CLI's JSON for the same inputs. Units are
+SI (kg, m, s, N, rad).
+"""
+
+from ._jobs import (
+    audit,
+    default_settings,
+    disturb,
+    linearize,
+    lqr,
+    lyapunov_spectrum,
+    margins,
+    report,
+    simulate,
+    sweep,
+    tune,
+)
+from ._model import Model, derive
+from ._native import InputError, ModelError, NumericalError, TwvError, shipped_models
+from ._results import LinearResult, Result, SimResult, SpectrumResult, SweepResult, TuneResult
+from ._settings import integrator, pid
+
+__all__ = [
+    "InputError",
+    "LinearResult",
+    "Model",
+    "ModelError",
+    "NumericalError",
+    "Result",
+    "SimResult",
+    "SpectrumResult",
+    "SweepResult",
+    "TuneResult",
+    "TwvError",
+    "audit",
+    "default_settings",
+    "derive",
+    "disturb",
+    "integrator",
+    "linearize",
+    "lqr",
+    "lyapunov_spectrum",
+    "margins",
+    "modeling",
+    "pid",
+    "report",
+    "shipped_models",
+    "simulate",
+    "sweep",
+    "tune",
+]
+
+
+def __getattr__(name: str):
+    # twv.modeling imports CasADi (slow); only when asked for.
+    if name == "modeling":
+        import importlib
+
+        return importlib.import_module("twv.modeling")
+    raise AttributeError(f"module 'twv' has no attribute {name!r}")
