@@ -1,1 +1,1 @@
-//! Cross-crate tests live in tests/tests/*.rs.
+//! Cross-crate tests live in tests/tests/all/ (one binary) and tests/tests/no_alloc.rs.

@@ -3,7 +3,7 @@
 //! for eight points, see `twv_kernels::lanes`), while everything else is done point by point with
 //! the very code of the one-point path ([`rk4_step_each`], the PID law, [`orthonormalize`]).
 //! Every point therefore gets the bits of [`metric::max_lyapunov`](super::metric::max_lyapunov)
-//! (`tests/tests/sweep_lanes.rs` checks it) and still depends only on its index.
+//! (`tests/tests/all/sweep_lanes.rs` checks it) and still depends only on its index.
 //!
 //! The points share the time grid (same h, T and horizon), so one clock drives them all. A
 //! point that falls, blows up or degenerates is finished with that status and from then on put

@@ -4,9 +4,7 @@
 //! shipped model, runtime and baked, at random points (angles beyond the inline sin/cos range
 //! included, so its C-library branch runs in both builds).
 
-mod common;
-
-use common::assert_bits;
+use crate::common::assert_bits;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use twv_generated::{baked, HenonHeiles, Lorenz, Segway7, Vehicle7, Vehicle8};

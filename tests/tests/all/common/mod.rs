@@ -1,5 +1,4 @@
-//! Helpers shared by the cross-crate test files (each file is its own crate and includes this
-//! module with `mod common;`).
+//! Helpers shared by the cross-crate test modules.
 
 /// `a` and `b` agree bit for bit, entry by entry (NaN payloads and signs of zero included).
 #[track_caller]

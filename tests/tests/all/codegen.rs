@@ -2,9 +2,7 @@
 //! values, vs finite differences; sparse vs dense Jacobians; J·W; baked vs runtime parameters;
 //! and the clear errors of the IR validator, the parameter files and the macro.
 
-mod common;
-
-use common::assert_bits;
+use crate::common::assert_bits;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use twv_generated::{baked, HenonHeiles, Lorenz, Segway7, Vehicle7, Vehicle8};
@@ -483,7 +481,7 @@ mod malformed_ir {
     use serde_json::{json, Value};
     use twv_ir::{parse_ir, InstrProblem, IrError, OutputProblem, Problem};
 
-    const LORENZ: &str = include_str!("../../generated/ir/lorenz.json");
+    const LORENZ: &str = include_str!("../../../generated/ir/lorenz.json");
 
     /// Lorenz's IR edited by `edit`, with a matching content hash (so the edit is what fails).
     fn edited(edit: impl FnOnce(&mut Value)) -> String {
@@ -827,7 +825,7 @@ mod malformed_ir {
 mod parameter_files {
     use twv_ir::{parse_params, ParamError, ParamProblem};
 
-    const PAPER: &str = include_str!("../../vehicles/paper.toml");
+    const PAPER: &str = include_str!("../../../vehicles/paper.toml");
 
     fn params() -> Vec<twv_ir::Param> {
         super::shipped_ir("vehicle8").params().to_vec()
@@ -862,7 +860,7 @@ mod parameter_files {
     fn shipped_files_load() {
         let values = parse_params(PAPER, "paper.toml", &params()).unwrap();
         assert_eq!((values[0], values[9], values[11]), (115.0, 0.81, 0.03));
-        let segway = include_str!("../../vehicles/segway.toml");
+        let segway = include_str!("../../../vehicles/segway.toml");
         assert_eq!(
             parse_params(segway, "segway.toml", &params()).unwrap()[1],
             107.0

@@ -1,0 +1,17 @@
+//! The cross-crate tests, one module per subject, in one test binary: the analysis library's
+//! generic code is instantiated and linked once instead of once per file (the separate binaries
+//! had made the test build the longest step of the test command). `tests/tests/no_alloc.rs`
+//! stays its own binary because it installs a counting global allocator.
+
+mod common;
+
+mod api;
+mod audit;
+mod codegen;
+mod control;
+mod isa;
+mod linear;
+mod lyapunov;
+mod report;
+mod sweep;
+mod sweep_lanes;
