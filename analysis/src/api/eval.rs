@@ -4,7 +4,7 @@ use serde::Serialize;
 use twv_model::Model;
 
 use crate::error::{Error, Result};
-use crate::model::{dispatch, input_vector, state_vector, ModelTask, ResolvedModel};
+use crate::model::{check_vector, dispatch, ModelTask, ResolvedModel};
 
 /// What to evaluate. Defaults: u = 0, no Jacobians.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -32,73 +32,58 @@ pub struct EvalResult {
     pub jac_u: Option<Vec<Vec<f64>>>,
 }
 
-struct Eval<'a>(&'a EvalSettings);
-
-impl ModelTask for Eval<'_> {
-    type Output = EvalResult;
-    fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
-        self,
-        model: &M,
-        resolved: &ResolvedModel,
-    ) -> Result<EvalResult> {
-        let info = model.info();
-        let x: [f64; NX] = state_vector("x", &self.0.x, info.states)?;
-        let u: [f64; NU] = match &self.0.u {
-            Some(u) => input_vector("u", u, info.inputs)?,
-            None => [0.0; NU],
-        };
-        let at = || {
-            format!(
-                "x = {:?}{}",
-                x,
-                if NU > 0 {
-                    format!(", u = {u:?}")
-                } else {
-                    String::new()
-                }
-            )
-        };
-        let finite = |what: &str, values: &[f64]| {
-            if values.iter().all(|v| v.is_finite()) {
-                Ok(())
-            } else {
-                Err(Error::NonFinite {
-                    what: what.to_string(),
-                    at: at(),
-                })
-            }
-        };
-        let mut f = [0.0; NX];
-        model.f(&x, &u, &mut f);
-        finite("f", &f)?;
-        let (jac_x, jac_u) = if self.0.jacobians {
-            let mut jx = [[0.0; NX]; NX];
-            let mut ju = [[0.0; NU]; NX];
-            model.jac_x(&x, &u, &mut jx);
-            model.jac_u(&x, &u, &mut ju);
-            finite("jac_x", jx.as_flattened())?;
-            finite("jac_u", ju.as_flattened())?;
-            // An interpreted model may carry padding inputs after its own (see twv_ir).
-            let nu = info.inputs.len();
-            (
-                Some(jx.iter().map(|r| r.to_vec()).collect()),
-                Some(ju.iter().map(|r| r[..nu].to_vec()).collect()),
-            )
-        } else {
-            (None, None)
-        };
-        Ok(EvalResult {
-            model: resolved.name().to_string(),
-            f: f.to_vec(),
-            jac_x,
-            jac_u,
-        })
-    }
-}
-
-/// Evaluates the model at one state; a non-finite output is an error naming it and the state.
+/// Evaluates the model at one state (a batch of one, [`evaluate_batch`]); a non-finite output
+/// is an error naming it and the state.
 pub fn evaluate(model: &ResolvedModel, settings: &EvalSettings) -> Result<EvalResult> {
-    dispatch(model, Eval(settings))
+    let (states, inputs) = (model.states(), model.inputs());
+    let (nx, nu) = (states.len(), inputs.len());
+    check_vector("x", &settings.x, &states)?;
+    let zeros = vec![0.0; nu];
+    let u = settings.u.as_deref().unwrap_or(&zeros);
+    check_vector("u", u, &inputs)?;
+    let batch = Batch {
+        x: &settings.x,
+        u,
+        v: &[],
+    };
+    let eval = |what: Quantity| -> Result<Vec<f64>> {
+        let mut out = vec![0.0; what.width(nx, nu)];
+        evaluate_batch(model, what, batch, &mut out)?;
+        Ok(out)
+    };
+    let finite = |what: &str, values: &[f64]| {
+        if values.iter().all(|v| v.is_finite()) {
+            return Ok(());
+        }
+        let inputs = if nu > 0 {
+            format!(", u = {u:?}")
+        } else {
+            String::new()
+        };
+        Err(Error::NonFinite {
+            what: what.to_string(),
+            at: format!("x = {:?}{inputs}", settings.x),
+        })
+    };
+    let f = eval(Quantity::F)?;
+    finite("f", &f)?;
+    let rows = |m: &[f64], width: usize| -> Vec<Vec<f64>> {
+        (0..nx).map(|i| m[i * width..][..width].to_vec()).collect()
+    };
+    let (jac_x, jac_u) = if settings.jacobians {
+        let (jx, ju) = (eval(Quantity::JacX)?, eval(Quantity::JacU)?);
+        finite("jac_x", &jx)?;
+        finite("jac_u", &ju)?;
+        (Some(rows(&jx, nx)), Some(rows(&ju, nu)))
+    } else {
+        (None, None)
+    };
+    Ok(EvalResult {
+        model: model.name().to_string(),
+        f,
+        jac_x,
+        jac_u,
+    })
 }
 
 /// What [`evaluate_batch`] computes at each state.
