@@ -92,6 +92,9 @@ pub enum Error {
         /// Why.
         reason: String,
     },
+    /// A user's hand file that does not read or does not fit the model.
+    #[error(transparent)]
+    HandFile(#[from] crate::hand_file::HandFileError),
     /// The caller cancelled the run (Ctrl-C).
     #[error("interrupted")]
     Interrupted,

@@ -46,7 +46,8 @@ pub fn to_py(e: Error) -> PyErr {
         | Error::LyapunovSettings(_)
         | Error::Control(_)
         | Error::Spec(_)
-        | Error::Sweep(_) => InputError::new_err(text),
+        | Error::Sweep(_)
+        | Error::HandFile(_) => InputError::new_err(text),
         Error::Ir(_)
         | Error::Params(_)
         | Error::Model(_)

@@ -129,6 +129,36 @@ def test_audit():
     assert [py.raw] == cli or py.raw == cli
 
 
+HAND7 = REPO / "examples" / "hand" / "vehicle7.toml"
+
+
+def test_audit_of_a_hand_file(tmp_path):
+    # The user's own hand model: the CLI's JSON, a file or its text.
+    model = twv.Model("vehicle7")
+    cli = cli_json("audit", "--hand", str(HAND7))
+    py = twv.audit(model, hand=HAND7)
+    assert py.raw == cli
+    assert py.passed and not py.raw["disagreements"]
+    # A planted error (the gyroscopic pair's half in Cp[v_x] dropped) fails the same way in
+    # both, naming the entry and printing the dropped term.
+    bad = tmp_path / "bad.toml"
+    text = HAND7.read_text().replace("(w_y^2 + w_z^2)", "w_y^2")
+    bad.write_text(text)
+    cli = cli_json("audit", "--hand", str(bad))
+    py = twv.audit(model, hand=bad)
+    assert py.raw == cli
+    assert not py.passed
+    first = py.raw["disagreements"][0]
+    assert first["label"] == "Cp[v_x]"
+    assert first["difference"] == "m2*b*sin(phi)*w_z^2"
+    from_text = twv.audit(model, hand_text=text)
+    assert from_text.raw["disagreements"][0]["difference"] == "m2*b*sin(phi)*w_z^2"
+    with pytest.raises(twv.InputError, match=r"hand file:\d+: \[Q\]: `v_y` is not one of"):
+        twv.audit(model, hand_text=text.replace("[Q]", "[Q]\nv_y = 0"))
+    with pytest.raises(twv.InputError, match="not both"):
+        twv.audit(model, hand=bad, hand_text=text)
+
+
 def test_sweep_equals_the_shard_file(vehicle8, tmp_path):
     import subprocess
 

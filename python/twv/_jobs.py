@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import pathlib
 from concurrent.futures import Executor
 from typing import Any
 
@@ -218,11 +220,41 @@ def tune(
     return TuneResult(json.loads(raw))
 
 
-def audit(model: Model, *, samples: int = 200, seed: int = 2016, tolerance: float = 1e-11):
-    """The audit of a vehicle's derived equations against the independent hand model and
-    physics (energy, momenta, symmetry); `passed` says whether every check held."""
+def audit(
+    model: Model,
+    *,
+    hand: str | os.PathLike | None = None,
+    hand_text: str | None = None,
+    samples: int = 200,
+    seed: int = 2016,
+    tolerance: float = 1e-11,
+    param_spread: float = 2.0,
+):
+    """The audit of a vehicle's derived equations. Without `hand`: against twv's independent
+    hand model and physics (energy, momenta, symmetry). With `hand` (a hand file, README "Your
+    own hand model") or `hand_text` (its TOML text): `model` against your hand model, term by
+    term, each disagreeing entry with `difference` = hand - derived, simplified. `passed` says
+    whether every check held. `param_spread` (hand files only): every second sample varies each
+    parameter by a factor in [1/spread, spread], so a term that vanishes for this vehicle's
+    values still shows."""
     settings = {"samples": int(samples), "seed": int(seed), "tolerance": float(tolerance)}
-    raw, _ = _run("audit", model, settings)
+    if hand is not None and hand_text is not None:
+        raise InputError("audit: give hand (a file) or hand_text, not both")
+    if hand is not None:
+        path = pathlib.Path(hand)
+        try:
+            hand_text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as e:
+            raise InputError(f"cannot read {path}: {e}") from None
+        origin = str(path)
+    else:
+        origin = "hand file"
+    if hand_text is None:
+        raw, _ = _run("audit", model, settings)
+    else:
+        settings["param_spread"] = float(param_spread)
+        job = {"hand": str(hand_text), "origin": origin, "audit": settings}
+        raw, _ = _run("audit_hand", model, job)
     return Result(json.loads(raw))
 
 

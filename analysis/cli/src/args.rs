@@ -32,7 +32,7 @@ pub enum Command {
     Eval(EvalArgs),
     /// Print the Rust code generated from a model's IR, for people to read and audit
     Codegen(CodegenArgs),
-    /// Audit the generated vehicle models against the independent hand model
+    /// Audit the generated vehicle models against the independent hand model, or any model against your own (--hand)
     Audit(AuditArgs),
     /// Lyapunov spectrum (Benettin–QR) with running estimates, errors and Σλ = ⟨tr J⟩
     Lyap(LyapArgs),

@@ -6,7 +6,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use common::{fails_with, twv};
+use common::{fails_with, negative_with, twv};
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -278,4 +278,143 @@ fn every_subcommand_has_help() {
             "{cmd}"
         );
     }
+}
+
+/// `twv audit --hand`: the example hand files pass; a planted error exits 3 naming the entry and
+/// printing the planted term; every kind of bad hand file is one line naming file, line and name.
+#[test]
+fn audit_of_a_users_hand_file() {
+    let hand = |m: &str| {
+        format!(
+            "{}/../../examples/hand/{m}.toml",
+            env!("CARGO_MANIFEST_DIR")
+        )
+    };
+    for m in ["vehicle8", "vehicle7", "segway7", "lorenz"] {
+        let out = twv(&["audit", "--hand", &hand(m)]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{m}: {stdout}");
+        assert!(stdout.contains("PASSED: every entry agrees"), "{stdout}");
+    }
+    let ir = format!(
+        "{}/../../generated/ir/vehicle7.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    assert!(twv(&["audit", "--ir", &ir, "--hand", &hand("vehicle7")])
+        .status
+        .success());
+
+    let dir = scratch("hand");
+    let text = std::fs::read_to_string(hand("vehicle7")).unwrap();
+    let write = |name: &str, from: &str, to: &str| {
+        assert_eq!(text.matches(from).count(), 1, "`{from}` occurs once");
+        let path = dir.join(name);
+        std::fs::write(&path, text.replacen(from, to, 1)).unwrap();
+        path.display().to_string()
+    };
+    let planted = write("planted.toml", "(w_y^2 + w_z^2)", "w_y^2");
+    let out = twv(&["audit", "--hand", &planted]);
+    negative_with(
+        &out,
+        &["planted.toml disagrees with the derivation of vehicle7"],
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("first: Cp[v_x] (line 18)"), "{stdout}");
+    assert!(stdout.contains("Cp[v_x] = m2*b*sin(phi)*w_z^2"), "{stdout}");
+
+    let cases = [
+        (
+            "state.toml",
+            "m2*b*cos(phi)\",   \"m1",
+            "m2*b*cos(psi)\",   \"m1",
+            vec![":13:", "M[v_x,w_y]", "column 18", "`psi`"],
+        ),
+        (
+            "param.toml",
+            "I2_xx - I2_zz + m2*b^2\"\n",
+            "I2_xx - I9_zz + m2*b^2\"\n",
+            vec![":9:", "let K", "`I9_zz`"],
+        ),
+        (
+            "missing.toml",
+            "theta = \"w_z\"\n",
+            "",
+            vec![":31:", "[qdot] has no entry for `theta`"],
+        ),
+        (
+            "shape.toml",
+            "\"m2*b*cos(phi)\", \"0\"]",
+            "\"m2*b*cos(phi)\"]",
+            vec![":12:", "M[w_y] has 2 entries", "3 speeds"],
+        ),
+        (
+            "syntax.toml",
+            "\"-m2*g*b*sin(phi)\"",
+            "\"-m2*g*b*sin(phi\"",
+            vec![":22:", "F[w_y]", "expected `)`"],
+        ),
+        (
+            "unknown.toml",
+            "[Q]\n",
+            "[Q]\nv_y = 0\n",
+            vec![":27:", "[Q]: `v_y` is not one of w_y, v_x, w_z"],
+        ),
+        ("toml.toml", "[F]\n", "[F\n", vec![":21:", "unclosed table"]),
+        (
+            "table.toml",
+            "[qdot]\n",
+            "[qdott]\n",
+            vec![":31:", "unknown field `qdott`"],
+        ),
+        (
+            "function.toml",
+            "v_x = \"F1\"",
+            "v_x = \"F1 + sinh(phi)\"",
+            vec![":28:", "unknown function `sinh`"],
+        ),
+        (
+            "model.toml",
+            "model = \"vehicle7\"",
+            "model = \"vehicle8\"",
+            vec![":6:", "the audited model is `vehicle7`"],
+        ),
+    ];
+    for (name, from, to, needles) in cases {
+        let path = write(name, from, to);
+        // model.toml names vehicle8; the others are read against vehicle7 by their own `model`.
+        let args: Vec<&str> = match name {
+            "model.toml" => vec!["audit", "--hand", &path, "--model", "vehicle7"],
+            _ => vec!["audit", "--hand", &path],
+        };
+        let mut all = vec![name];
+        all.extend(needles);
+        fails_with(&twv(&args), &all);
+    }
+    fails_with(
+        &twv(&["audit", "--hand", &hand("lorenz"), "--model", "vehicle8"]),
+        &["lorenz.toml:4:", "the audited model is `vehicle8`"],
+    );
+    fails_with(
+        &twv(&[
+            "audit",
+            "--hand",
+            &hand("vehicle7"),
+            "--param-spread",
+            "0.5",
+        ]),
+        &["--param-spread", "0.5 must be in [1, 100]"],
+    );
+    let huge = dir.join("huge.toml");
+    std::fs::write(&huge, vec![b'#'; 2 << 20]).unwrap();
+    fails_with(
+        &twv(&[
+            "audit",
+            "--hand",
+            &huge.display().to_string(),
+            "--model",
+            "vehicle7",
+        ]),
+        &["huge.toml", "more than a hand file's"],
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,9 +1,12 @@
 //! The generated vehicle models against the independent hand model: `twv audit`.
 
+use std::path::PathBuf;
+
 use twv_ir::Ir;
 
 use crate::audit::{audit, AuditReport, AuditSettings};
 use crate::error::{Error, Result};
+use crate::hand_file::{audit_hand_model, read_hand_file, HandAuditReport, HandAuditSettings};
 use crate::hand_model::{HandSegway7, HandVehicle7, HandVehicle8, VehicleParams, PARAM_NAMES};
 use crate::model::{Engine, ResolvedModel};
 
@@ -113,4 +116,100 @@ pub fn audit_model(model: &ResolvedModel, settings: &AuditSettings) -> Result<Au
             settings,
         ),
     })
+}
+
+/// Where a user's hand model comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum HandSource {
+    /// A hand file (TOML, README "Your own hand model").
+    File(PathBuf),
+    /// Its text, with the name messages use for it.
+    Text {
+        /// The TOML document.
+        text: String,
+        /// Its name in messages and reports.
+        origin: String,
+    },
+}
+
+/// The largest hand file read (a hand model is a page of formulas, not megabytes).
+pub const MAX_HAND_FILE_BYTES: u64 = 1 << 20;
+
+impl HandSource {
+    /// The text and its name.
+    pub fn read(&self) -> Result<(String, String)> {
+        match self {
+            HandSource::Text { text, origin } => {
+                if text.len() as u64 > MAX_HAND_FILE_BYTES {
+                    return Err(Error::input(
+                        "hand",
+                        format!(
+                            "{origin}: {} bytes is more than a hand file's {MAX_HAND_FILE_BYTES}",
+                            text.len()
+                        ),
+                    ));
+                }
+                Ok((text.clone(), origin.clone()))
+            }
+            HandSource::File(path) => {
+                let read_error = |reason: String| Error::Read {
+                    path: path.clone(),
+                    reason,
+                };
+                let size = std::fs::metadata(path)
+                    .map_err(|e| read_error(e.to_string()))?
+                    .len();
+                if size > MAX_HAND_FILE_BYTES {
+                    return Err(read_error(format!(
+                        "{size} bytes is more than a hand file's {MAX_HAND_FILE_BYTES}"
+                    )));
+                }
+                let text = std::fs::read_to_string(path).map_err(|e| read_error(e.to_string()))?;
+                Ok((text, path.display().to_string()))
+            }
+        }
+    }
+}
+
+/// Audits a user's hand model against the model's derivation (any shipped model or IR, its
+/// parameters as resolved), term by term: see [`crate::hand_file`].
+pub fn audit_hand(
+    model: &ResolvedModel,
+    hand: &HandSource,
+    settings: &HandAuditSettings,
+) -> Result<HandAuditReport> {
+    settings.validate()?;
+    let (text, origin) = hand.read()?;
+    let hand = read_hand_file(&text, &origin, &model.ir)?;
+    audit_hand_model(&model.ir, &model.params, &hand, settings)
+}
+
+/// The JSON job `audit_hand`: a hand file's text with the audit's settings (the Python package
+/// reads the file and sends this).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HandAuditJob {
+    /// The hand file's TOML text.
+    pub hand: String,
+    /// Its name in messages and the report. Default `hand file`.
+    #[serde(default = "default_origin")]
+    pub origin: String,
+    /// Samples, seed, tolerance, parameter spread. Default [`HandAuditSettings::default`].
+    #[serde(default)]
+    pub audit: HandAuditSettings,
+}
+
+fn default_origin() -> String {
+    "hand file".into()
+}
+
+impl HandAuditJob {
+    /// Runs the job on `model`.
+    pub fn run(self, model: &ResolvedModel) -> Result<HandAuditReport> {
+        let source = HandSource::Text {
+            text: self.hand,
+            origin: self.origin,
+        };
+        audit_hand(model, &source, &self.audit)
+    }
 }

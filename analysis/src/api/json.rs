@@ -9,8 +9,8 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 
 use super::{
-    analyse, audit_model, compute_points, simulate, spectrum, tune_model, LinearSettings,
-    SimSettings, SpectrumSettings, SweepSettings, TuneSettings,
+    analyse, audit_model, compute_points, simulate, spectrum, tune_model, HandAuditJob,
+    LinearSettings, SimSettings, SpectrumSettings, SweepSettings, TuneSettings,
 };
 use crate::audit::AuditSettings;
 use crate::error::{Error, Result};
@@ -18,14 +18,23 @@ use crate::model::ResolvedModel;
 use crate::progress::Progress;
 
 /// The jobs [`run`] knows, by name.
-pub const JOBS: [&str; 6] = ["spectrum", "simulate", "linear", "tune", "sweep", "audit"];
+pub const JOBS: [&str; 7] = [
+    "spectrum",
+    "simulate",
+    "linear",
+    "tune",
+    "sweep",
+    "audit",
+    "audit_hand",
+];
 
-/// The settings of `job` as JSON objects.
-fn settings<T: DeserializeOwned>(job: &str, text: &str) -> Result<T> {
+/// Reads the settings of `job` from a JSON object (the error names the job and the field).
+pub fn settings<T: DeserializeOwned>(job: &str, text: &str) -> Result<T> {
     serde_json::from_str(text).map_err(|e| Error::input("settings", format!("{job}: {e}")))
 }
 
-fn json<T: Serialize>(value: &T) -> Result<String> {
+/// A result or settings value as pretty JSON, the way [`run`] returns it.
+pub fn to_text<T: Serialize>(value: &T) -> Result<String> {
     serde_json::to_string_pretty(value)
         .map_err(|e| Error::input("result", format!("cannot be written as JSON: {e}")))
 }
@@ -41,14 +50,18 @@ fn unknown(job: &str) -> Error {
 /// `grid` and `metric`).
 pub fn default_settings(job: &str) -> Result<String> {
     match job {
-        "spectrum" => json(&SpectrumSettings::default()),
-        "simulate" => json(&SimSettings::default()),
-        "linear" => json(&LinearSettings::default()),
-        "tune" => json(&TuneSettings::default()),
-        "audit" => json(&AuditSettings::default()),
+        "spectrum" => to_text(&SpectrumSettings::default()),
+        "simulate" => to_text(&SimSettings::default()),
+        "linear" => to_text(&LinearSettings::default()),
+        "tune" => to_text(&TuneSettings::default()),
+        "audit" => to_text(&AuditSettings::default()),
         "sweep" => Err(Error::input(
             "settings",
             "sweep: no default; give at least `grid` and `metric`",
+        )),
+        "audit_hand" => Err(Error::input(
+            "settings",
+            "audit_hand: no default; give at least `hand` (the hand file's text)",
         )),
         _ => Err(unknown(job)),
     }
@@ -77,23 +90,27 @@ pub fn run(
         "spectrum" => {
             let r = spectrum(model, &settings(job, settings_json)?, progress)?;
             Ok(Output {
-                result: json(&r)?,
+                result: to_text(&r)?,
                 csv: Some(r.running_csv()),
             })
         }
         "simulate" => {
             let r = simulate(model, &settings(job, settings_json)?, progress)?;
             Ok(Output {
-                result: json(&r)?,
+                result: to_text(&r)?,
                 csv: Some(r.csv()),
             })
         }
-        "linear" => json(&analyse(model, &settings(job, settings_json)?)?).map(plain),
-        "tune" => json(&tune_model(model, &settings(job, settings_json)?)?).map(plain),
-        "audit" => json(&audit_model(model, &settings(job, settings_json)?)?).map(plain),
+        "linear" => to_text(&analyse(model, &settings(job, settings_json)?)?).map(plain),
+        "tune" => to_text(&tune_model(model, &settings(job, settings_json)?)?).map(plain),
+        "audit" => to_text(&audit_model(model, &settings(job, settings_json)?)?).map(plain),
+        "audit_hand" => {
+            let job: HandAuditJob = settings(job, settings_json)?;
+            to_text(&job.run(model)?).map(plain)
+        }
         "sweep" => {
             let s: SweepSettings = settings(job, settings_json)?;
-            json(&super::sweep(model, &s, progress)?).map(plain)
+            to_text(&super::sweep(model, &s, progress)?).map(plain)
         }
         _ => Err(unknown(job)),
     }
@@ -123,63 +140,11 @@ pub fn sweep_range(
     if !computed.complete {
         return Err(Error::Interrupted);
     }
-    json(&computed.points)
+    to_text(&computed.points)
 }
 
 /// The number of points of a sweep's grid (validated).
 pub fn sweep_len(model: &ResolvedModel, settings_json: &str) -> Result<usize> {
     let s: SweepSettings = settings("sweep", settings_json)?;
     Ok(s.config(model)?.grid.len())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::model::ModelSpec;
-    use crate::progress::Silent;
-
-    #[test]
-    fn default_settings_read_back_as_themselves() {
-        for job in ["spectrum", "simulate", "linear", "tune", "audit"] {
-            let text = default_settings(job).unwrap();
-            let again = match job {
-                "spectrum" => json(&settings::<SpectrumSettings>(job, &text).unwrap()),
-                "simulate" => json(&settings::<SimSettings>(job, &text).unwrap()),
-                "linear" => json(&settings::<LinearSettings>(job, &text).unwrap()),
-                "tune" => json(&settings::<TuneSettings>(job, &text).unwrap()),
-                _ => json(&settings::<AuditSettings>(job, &text).unwrap()),
-            }
-            .unwrap();
-            assert_eq!(text, again, "{job}");
-        }
-        assert_eq!(
-            settings::<SimSettings>("simulate", "{}").unwrap(),
-            SimSettings::default()
-        );
-    }
-
-    #[test]
-    fn bad_settings_name_the_field() {
-        let model = ModelSpec::shipped("vehicle8").resolve().unwrap();
-        let e = run("linear", &model, r#"{"lqr_qq": 1}"#, &Silent).unwrap_err();
-        assert!(e.to_string().contains("unknown field `lqr_qq`"), "{e}");
-        let e = run("tune", &model, r#"{"spec": "dpm>=95"}"#, &Silent).unwrap_err();
-        assert!(e.to_string().contains("dpm"), "{e}");
-        let e = run("simulate", &model, r#"{"phi0": "a"}"#, &Silent).unwrap_err();
-        assert!(e.to_string().starts_with("settings: simulate:"), "{e}");
-        let e = run("fly", &model, "{}", &Silent).unwrap_err();
-        assert!(e.to_string().contains("known: spectrum"), "{e}");
-        let grid = r#"{"grid": {"kp": {"lo": 0, "hi": 8000, "n": 4}, "kd": {"lo": 0, "hi": 4000, "n": 4}, "ki": null}, "metric": "spectral-abscissa"}"#;
-        assert_eq!(sweep_len(&model, grid).unwrap(), 16);
-        let e = sweep_range(&model, grid, 10..17, &Silent).unwrap_err();
-        assert!(e.to_string().contains("10..17"), "{e}");
-    }
-
-    #[test]
-    fn a_spec_reads_as_text_or_as_written() {
-        let text: TuneSettings = settings("tune", r#"{"spec": "dpm>=60,dgm>=6dB"}"#).unwrap();
-        let written = json(&text).unwrap();
-        let again: TuneSettings = settings("tune", &written).unwrap();
-        assert_eq!(text, again);
-    }
 }

@@ -29,7 +29,9 @@ mod sweep;
 mod tune;
 
 pub use crate::progress::{CancelFlag, Progress, Silent};
-pub use audit::{audit_model, AUDITED, MAX_SAMPLES};
+pub use audit::{
+    audit_hand, audit_model, HandAuditJob, HandSource, AUDITED, MAX_HAND_FILE_BYTES, MAX_SAMPLES,
+};
 pub use codegen::{camel, generate, CodegenSettings};
 pub use eval::{evaluate, evaluate_batch, Batch, EvalResult, EvalSettings, Quantity};
 pub use linear::{

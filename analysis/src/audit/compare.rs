@@ -34,13 +34,13 @@ pub struct QuantityError {
 }
 
 /// Accumulates the errors of one quantity over the samples.
-struct Tally {
+pub(crate) struct Tally {
     quantity: &'static str,
     entries: Vec<EntryError>,
 }
 
 impl Tally {
-    fn new(quantity: &'static str, labels: Vec<String>) -> Self {
+    pub(crate) fn new(quantity: &'static str, labels: Vec<String>) -> Self {
         let entries = labels
             .into_iter()
             .map(|label| EntryError {
@@ -54,7 +54,7 @@ impl Tally {
     }
 
     /// Record one sample: `got` (the audited model) against `want` (the reference).
-    fn add(&mut self, sample: usize, got: &[f64], want: &[f64]) {
+    pub(crate) fn add(&mut self, sample: usize, got: &[f64], want: &[f64]) {
         let scale = want.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
         let scale = if scale > 0.0 { scale } else { 1.0 };
         for ((entry, g), w) in self.entries.iter_mut().zip(got).zip(want) {
@@ -75,7 +75,7 @@ impl Tally {
         }
     }
 
-    fn finish(self) -> QuantityError {
+    pub(crate) fn finish(self) -> QuantityError {
         let worst = self
             .entries
             .iter()
@@ -98,11 +98,11 @@ impl Tally {
     }
 }
 
-fn vector_labels(quantity: &str, names: &[&str]) -> Vec<String> {
+pub(crate) fn vector_labels(quantity: &str, names: &[&str]) -> Vec<String> {
     names.iter().map(|n| format!("{quantity}[{n}]")).collect()
 }
 
-fn matrix_labels(quantity: &str, rows: &[&str], cols: &[&str]) -> Vec<String> {
+pub(crate) fn matrix_labels(quantity: &str, rows: &[&str], cols: &[&str]) -> Vec<String> {
     rows.iter()
         .flat_map(|r| cols.iter().map(move |c| format!("{quantity}[{r},{c}]")))
         .collect()

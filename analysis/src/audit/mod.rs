@@ -4,7 +4,7 @@
 //! An energy test cannot catch a dropped gyroscopic pair (it does no work); comparing every
 //! entry of M, Cp, F, Q, f and ∂f/∂x at random large-angle, fast-spin states does.
 
-mod compare;
+pub(crate) mod compare;
 mod physics;
 mod report;
 mod sampling;
@@ -13,7 +13,7 @@ mod simulation;
 pub use compare::{compare, EntryError, QuantityError};
 pub use physics::{upright_lambda_squared, PhysicsCheck};
 pub use report::AuditReport;
-pub use sampling::{samples, Sample};
+pub use sampling::{sample_vectors, samples, Sample};
 
 use twv_model::Mechanical;
 

@@ -29,24 +29,49 @@ pub fn samples<const NX: usize, const NU: usize>(
     n: usize,
     seed: u64,
 ) -> Vec<Sample<NX, NU>> {
+    sample_vectors(state_names, NU, input_scale, n, seed)
+        .into_iter()
+        .map(|(x, u)| Sample {
+            x: x.try_into().expect("NX states"),
+            u: u.try_into().expect("NU inputs"),
+        })
+        .collect()
+}
+
+/// [`samples`] with run-time sizes, as (x, u) pairs: the same numbers for the same sizes.
+pub fn sample_vectors<S: AsRef<str>>(
+    state_names: &[S],
+    nu: usize,
+    input_scale: f64,
+    n: usize,
+    seed: u64,
+) -> Vec<(Vec<f64>, Vec<f64>)> {
+    let nx = state_names.len();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut out = Vec::with_capacity(n);
-    let mut hanging = [0.0; NX];
-    hanging[0] = std::f64::consts::PI;
-    for x in [[0.0; NX], hanging].into_iter().take(n) {
-        out.push(Sample { x, u: [0.0; NU] });
+    let mut hanging = vec![0.0; nx];
+    if let Some(first) = hanging.first_mut() {
+        *first = std::f64::consts::PI;
+    }
+    for x in [vec![0.0; nx], hanging].into_iter().take(n) {
+        out.push((x, vec![0.0; nu]));
     }
     while out.len() < n {
-        let mut x = [0.0; NX];
-        for (xi, name) in x.iter_mut().zip(state_names) {
-            let r = half_range(name);
-            *xi = rng.gen_range(-r..r);
-        }
-        let mut u = [0.0; NU];
-        for ui in &mut u {
-            *ui = rng.gen_range(-input_scale..input_scale);
-        }
-        out.push(Sample { x, u });
+        let x = state_names
+            .iter()
+            .map(|name| {
+                let r = half_range(name.as_ref());
+                rng.gen_range(-r..r)
+            })
+            .collect();
+        // A zero scale gives zero inputs (an empty range would panic).
+        let u = (0..nu)
+            .map(|_| match input_scale > 0.0 {
+                true => rng.gen_range(-input_scale..input_scale),
+                false => 0.0,
+            })
+            .collect();
+        out.push((x, u));
     }
     out
 }

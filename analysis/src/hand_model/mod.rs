@@ -291,6 +291,3 @@ fn a_to_n(theta: f64, ax: f64, ay: f64) -> [f64; 2] {
     let (s, c) = theta.sin_cos();
     [ax * c - ay * s, ax * s + ay * c]
 }
-
-#[cfg(test)]
-mod tests;

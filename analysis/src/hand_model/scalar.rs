@@ -28,6 +28,12 @@ pub trait Real:
     fn sin(self) -> Self;
     /// cos.
     fn cos(self) -> Self;
+    /// Square root (a user's hand file may use it).
+    fn sqrt(self) -> Self;
+    /// Exponential.
+    fn exp(self) -> Self;
+    /// Natural logarithm.
+    fn ln(self) -> Self;
 }
 
 impl Real for f64 {
@@ -42,6 +48,15 @@ impl Real for f64 {
     }
     fn cos(self) -> Self {
         f64::cos(self)
+    }
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    fn exp(self) -> Self {
+        f64::exp(self)
+    }
+    fn ln(self) -> Self {
+        f64::ln(self)
     }
 }
 
@@ -124,17 +139,36 @@ impl Real for Dual {
     fn cos(self) -> Self {
         Self::new(self.v.cos(), -self.v.sin() * self.d)
     }
+    fn sqrt(self) -> Self {
+        let r = self.v.sqrt();
+        Self::new(r, self.d / (2.0 * r))
+    }
+    fn exp(self) -> Self {
+        let e = self.v.exp();
+        Self::new(e, e * self.d)
+    }
+    fn ln(self) -> Self {
+        Self::new(self.v.ln(), self.d / self.v)
+    }
 }
 
 /// Solves `a z = b` by Gaussian elimination with partial pivoting (pivots chosen on the value
 /// part), on the stack. M is symmetric positive definite for physical parameters, so the pivoting
 /// is only a guard; a singular matrix gives non-finite output, never a panic.
 pub fn solve<S: Real, const N: usize>(mut a: [[S; N]; N], mut b: [S; N]) -> [S; N] {
-    for k in 0..N {
+    solve_in_place(&mut a, &mut b);
+    b
+}
+
+/// [`solve`] on rows of any storage, overwriting `b` with z: the same operations in the same
+/// order (so the same bits), for run-time sizes such as a user's hand file (`hand_file`).
+pub fn solve_in_place<S: Real, R: AsMut<[S]>>(a: &mut [R], b: &mut [S]) {
+    let n = b.len();
+    for k in 0..n {
         let mut piv = k;
-        let mut best = a[k][k].value().abs();
-        for (i, row) in a.iter().enumerate().skip(k + 1) {
-            let m = row[k].value().abs();
+        let mut best = a[k].as_mut()[k].value().abs();
+        for (i, row) in a.iter_mut().enumerate().skip(k + 1) {
+            let m = row.as_mut()[k].value().abs();
             if m > best {
                 best = m;
                 piv = i;
@@ -142,23 +176,24 @@ pub fn solve<S: Real, const N: usize>(mut a: [[S; N]; N], mut b: [S; N]) -> [S; 
         }
         a.swap(k, piv);
         b.swap(k, piv);
-        let akk = a[k][k];
-        for i in k + 1..N {
-            let l = a[i][k] / akk;
-            let rowk = a[k];
-            for (aij, akj) in a[i].iter_mut().zip(rowk.iter()).skip(k) {
+        let (top, bottom) = a.split_at_mut(k + 1);
+        let rowk = top[k].as_mut();
+        let akk = rowk[k];
+        for (i, row) in bottom.iter_mut().enumerate() {
+            let row = row.as_mut();
+            let l = row[k] / akk;
+            for (aij, akj) in row.iter_mut().zip(rowk.iter()).skip(k) {
                 *aij = *aij - l * *akj;
             }
-            b[i] = b[i] - l * b[k];
+            b[k + 1 + i] = b[k + 1 + i] - l * b[k];
         }
     }
-    let mut z = b;
-    for k in (0..N).rev() {
+    for k in (0..n).rev() {
+        let row = a[k].as_mut();
         let mut acc = b[k];
-        for j in k + 1..N {
-            acc = acc - a[k][j] * z[j];
+        for j in k + 1..n {
+            acc = acc - row[j] * b[j];
         }
-        z[k] = acc / a[k][k];
+        b[k] = acc / row[k];
     }
-    z
 }

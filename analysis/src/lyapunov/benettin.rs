@@ -194,14 +194,18 @@ where
 /// The batches of the batch-means error: the last `count · size` of the `n` intervals cut into
 /// `count` consecutive batches of `size`; leftover intervals at the start (the least converged
 /// end) belong to none.
-struct Batches {
-    count: usize,
-    size: usize,
-    first: usize,
+pub struct Batches {
+    /// Number of batches.
+    pub count: usize,
+    /// Intervals per batch.
+    pub size: usize,
+    /// Leftover intervals at the start.
+    pub first: usize,
 }
 
 impl Batches {
-    fn new(n: usize, count: usize) -> Self {
+    /// The batches of `n` intervals into at most `count`.
+    pub fn new(n: usize, count: usize) -> Self {
         let size = (n / count.max(1)).max(1);
         let count = count.min(n);
         Self {
@@ -212,7 +216,7 @@ impl Batches {
     }
 
     /// The batch of interval `i` (1-based).
-    fn of(&self, i: usize) -> Option<usize> {
+    pub fn of(&self, i: usize) -> Option<usize> {
         (i > self.first).then(|| ((i - 1 - self.first) / self.size).min(self.count - 1))
     }
 }
@@ -306,20 +310,4 @@ fn permute_rows(values: &[f64], order: &[usize]) -> Vec<f64> {
 
 fn norm<const N: usize>(v: &[f64; N]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::Batches;
-
-    #[test]
-    fn batches_drop_the_leftover_at_the_start() {
-        let b = Batches::new(23, 5);
-        assert_eq!((b.count, b.size, b.first), (5, 4, 3));
-        assert_eq!(b.of(3), None);
-        assert_eq!(b.of(4), Some(0));
-        assert_eq!(b.of(7), Some(0));
-        assert_eq!(b.of(8), Some(1));
-        assert_eq!(b.of(23), Some(4));
-    }
 }

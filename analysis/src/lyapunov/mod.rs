@@ -32,7 +32,8 @@ mod stats;
 
 pub use basis::initial_basis;
 pub use benettin::{
-    lyapunov_spectrum, lyapunov_spectrum_observed, lyapunov_spectrum_with, MAX_RUNNING_ROWS,
+    lyapunov_spectrum, lyapunov_spectrum_observed, lyapunov_spectrum_with, Batches,
+    MAX_RUNNING_ROWS,
 };
 pub use classify::{
     classify, verdict, Classification, ExponentSign, SignDecision, SignRule, SignTest,

@@ -62,37 +62,3 @@ fn reflect(v: &[f64], beta: f64, x: &mut [f64]) {
         *xi -= s * vi;
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn q_orthonormal_and_r_positive() {
-        let w0 = [
-            [1.0, 2.0, 3.0, 4.0],
-            [-2.0, 0.5, 1.0, 0.0],
-            [0.3, -1.0, 2.0, 5.0],
-        ];
-        let mut w = w0;
-        let r = orthonormalize(&mut w);
-        for i in 0..3 {
-            assert!(r[i] > 0.0);
-            for j in 0..3 {
-                let d: f64 = (0..4).map(|k| w[i][k] * w[j][k]).sum();
-                assert!((d - if i == j { 1.0 } else { 0.0 }).abs() < 1e-14);
-            }
-        }
-        // R_00 = ‖w0[0]‖ and the first column keeps its direction.
-        let n0 = (30.0f64).sqrt();
-        assert!((r[0] - n0).abs() < 1e-13);
-        assert!((w[0][3] - 4.0 / n0).abs() < 1e-14);
-        // |det| of the Gram matrix is preserved: Π R_kk² = det(W Wᵀ).
-        let g = |i: usize, j: usize| (0..4).map(|k| w0[i][k] * w0[j][k]).sum::<f64>();
-        let det = g(0, 0) * (g(1, 1) * g(2, 2) - g(1, 2) * g(2, 1))
-            - g(0, 1) * (g(1, 0) * g(2, 2) - g(1, 2) * g(2, 0))
-            + g(0, 2) * (g(1, 0) * g(2, 1) - g(1, 1) * g(2, 0));
-        let prod: f64 = r.iter().map(|x| x * x).product();
-        assert!((prod / det - 1.0).abs() < 1e-12);
-    }
-}

@@ -50,25 +50,3 @@ pub fn kaplan_yorke(sorted: &[f64], full: bool) -> Option<f64> {
     }
     full.then_some(sorted.len() as f64)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn kaplan_yorke_lorenz() {
-        let d = kaplan_yorke(&[0.9056, 0.0, -14.5723], true).unwrap();
-        assert!((d - (2.0 + 0.9056 / 14.5723)).abs() < 1e-12);
-        assert_eq!(kaplan_yorke(&[-1.0, -2.0], true), Some(0.0));
-        assert_eq!(kaplan_yorke(&[1.0, 0.5], false), None);
-        assert_eq!(kaplan_yorke(&[1.0, -1.0], true), Some(2.0));
-    }
-
-    #[test]
-    fn batch_means_of_constant_is_zero() {
-        assert_eq!(batch_means_stderr(&[2.0; 20], 4), 0.0);
-        let s = batch_means_stderr(&[0.0, 1.0, 0.0, 1.0, 0.0, 3.0], 3);
-        // Batch means 0.5, 0.5, 1.5: sd = 0.57735, / √3.
-        assert!((s - (1.0f64 / 3.0).sqrt() / 3f64.sqrt()).abs() < 1e-12);
-    }
-}

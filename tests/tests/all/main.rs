@@ -6,12 +6,17 @@
 mod common;
 
 mod api;
+mod api_json;
 mod audit;
 mod codegen;
 mod control;
+mod hand_file;
+mod hand_model;
 mod isa;
 mod linear;
 mod lyapunov;
+mod lyapunov_parts;
+mod output;
 mod report;
 mod sweep;
 mod sweep_lanes;

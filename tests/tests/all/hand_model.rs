@@ -3,10 +3,11 @@
 // Index loops mirror the matrix formulas (M[i][j], J[i][j]) and read better than iterator chains.
 #![allow(clippy::needless_range_loop)]
 
-use super::*;
 use nalgebra::DMatrix;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use twv_analysis::hand_model::scalar::*;
+use twv_analysis::hand_model::*;
 use twv_model::{Mechanical, Model};
 
 fn load(file: &str) -> VehicleParams {
