@@ -9,9 +9,14 @@ stamp="$venv/.twv-requirements"
 if [[ ! -x "$venv/bin/python" ]]; then
     python3 -m venv "$venv"
 fi
-pins="$(cat "$root/modeling/requirements.txt" "$root/python/requirements.txt")"
+uv_pin="uv==0.13.9"
+pins="$uv_pin
+$(cat "$root/modeling/requirements.txt" "$root/python/requirements.txt")"
 if [[ "$pins" != "$(cat "$stamp" 2>/dev/null)" ]]; then
-    "$venv/bin/python" -m pip install --quiet --disable-pip-version-check \
+    # uv (pinned) resolves and installs the pins in parallel: ~10 s on a fresh machine where
+    # pip took ~50 s, the longest step before the Rust build.
+    "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "$uv_pin"
+    "$venv/bin/uv" pip install --quiet --python "$venv/bin/python" \
         -r "$root/modeling/requirements.txt" -r "$root/python/requirements.txt"
     # Make twv_modeling importable from the source tree (what an editable install does, without
     # needing a build backend).

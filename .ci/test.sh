@@ -31,11 +31,18 @@ step "IR freshness (generated/ir is what the modeling code derives today)"
 step "cargo fmt --check"
 cargo fmt --all --check
 
-step "cargo clippy --all-targets -- -D warnings"
-cargo clippy --workspace --all-targets -- -D warnings
+# One build of every target, linted: clippy-driver compiles the workspace crates with -D warnings
+# (the lints of `cargo clippy --workspace --all-targets -- -D warnings`, see .ci/clippy-rustc), so
+# the code is linted and built once instead of checked and then built. The dev profile for the
+# tests too (not cargo's separate `test` profile), so that the Python extension below reuses
+# every compiled crate instead of building them all again; it inherits the wrapper.
+step "cargo build of every target with clippy's lints (-D warnings)"
+TWV_CLIPPY_DRIVER="$(rustup which clippy-driver 2>/dev/null || command -v clippy-driver)"
+export TWV_CLIPPY_DRIVER
+export RUSTC_WORKSPACE_WRAPPER="$PWD/.ci/clippy-rustc"
+cargo test --workspace --no-run --profile dev
+cargo build --workspace --benches --profile dev
 
-# The dev profile for the tests too (not cargo's separate `test` profile), so that the Python
-# extension below reuses every compiled crate instead of building them all again.
 step "cargo nextest (every test binary, in parallel)"
 cargo nextest run --workspace --cargo-profile dev --no-fail-fast
 
