@@ -43,6 +43,45 @@ ROTATIONS = {"x": rot_x, "y": rot_y, "z": rot_z}
 AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1)}
 
 
+def axis_vector(axis, what: str) -> ca.SX:
+    """A joint or torque axis in its frame: "x", "y", "z", or a unit vector of three numbers or
+    parameter expressions (e.g. a steer axis tilted by a head angle lam: (sin(lam), 0, cos(lam))).
+    A numeric vector must have unit length; a symbolic one is the describer's promise."""
+    if isinstance(axis, str):
+        if axis not in AXES:
+            raise ValueError(f"{what}: axis {axis!r} is not x, y, z or a unit vector")
+        return vec3(AXES[axis])
+    if len(axis) != 3:
+        raise ValueError(f"{what}: an axis needs 3 components, not {len(axis)}")
+    if all(isinstance(e, int | float) for e in axis):
+        norm2 = sum(float(e) ** 2 for e in axis)
+        if abs(norm2 - 1.0) > 1e-12:
+            raise ValueError(f"{what}: axis {tuple(axis)} has length {norm2**0.5:.6g}, not 1")
+    return vec3(axis)
+
+
+def rot_about(u: ca.SX, angle: ca.SX) -> ca.SX:
+    """Rotation by `angle` about the unit axis u: Rodrigues, I + sin K + (1 - cos) K^2, K = [u]x."""
+    k = ca.skew(u)
+    return ca.SX.eye(3) + ca.sin(angle) * k + (1 - ca.cos(angle)) * (k @ k)
+
+
+def inertia_matrix(inertia, what: str) -> ca.SX:
+    """A body's inertia tensor about its centroid in its frame: the principal moments
+    (Ixx, Iyy, Izz), or all six entries (Ixx, Iyy, Izz, Ixy, Iyz, Ixz) of the (symmetric) tensor
+    (the bicycle benchmark's I_Bxz is its x-z entry)."""
+    if len(inertia) == 3:
+        return ca.diag(vec3(inertia))
+    if len(inertia) == 6:
+        ixx, iyy, izz, ixy, iyz, ixz = (
+            ca.SX(e) if isinstance(e, int | float) else e for e in inertia
+        )
+        return ca.blockcat([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+    raise ValueError(
+        f"{what}: inertia needs 3 principal moments or 6 tensor entries, not {len(inertia)}"
+    )
+
+
 @dataclass
 class PlanarJoint:
     """SE(2): the child translates in the parent's x-y plane at a fixed height and yaws about z.
@@ -82,7 +121,8 @@ class PlanarJoint:
 
 @dataclass
 class RevoluteJoint:
-    """A hinge about a fixed axis through a point of the parent frame.
+    """A hinge about a fixed axis through a point of the parent frame: "x", "y", "z" or any unit
+    vector in the parent frame (see `axis_vector`), through `at`.
 
     One coordinate (the angle) and one quasi-velocity (its rate). `axisymmetric` marks a rotor
     (a wheel): the child's inertia is symmetric about the axis and its centroid lies on it, so the
@@ -94,7 +134,7 @@ class RevoluteJoint:
     parent: str
     coord: str
     speed: str
-    axis: str = "y"
+    axis: str | tuple = "y"
     at: tuple = ZERO3
     axisymmetric: bool = False
 
@@ -109,7 +149,9 @@ class RevoluteJoint:
     def rotation(self, q):
         if self.axisymmetric:
             return ca.SX.eye(3)
-        return ROTATIONS[self.axis](q[0])
+        if isinstance(self.axis, str) and self.axis in ROTATIONS:
+            return ROTATIONS[self.axis](q[0])
+        return rot_about(axis_vector(self.axis, f"joint {self.name}"), q[0])
 
     def translation(self, q):
         return vec3(self.at)
@@ -118,8 +160,7 @@ class RevoluteJoint:
         return ca.SX.eye(1)
 
     def twist(self, p):
-        e = AXES[self.axis]
-        return vec3(tuple(ei * p[0] for ei in e)), vec3(ZERO3)
+        return axis_vector(self.axis, f"joint {self.name}") * p[0], vec3(ZERO3)
 
     def structure(self):
         return _zeros3(1)
@@ -129,8 +170,9 @@ class RevoluteJoint:
 class Body:
     """A rigid body fixed in a joint's child frame.
 
-    `centroid` is the centre of mass in that frame; `inertia` the principal moments
-    (Ixx, Iyy, Izz) about the centroid along the frame axes.
+    `centroid` is the centre of mass in that frame; `inertia` about the centroid along the frame
+    axes: the principal moments (Ixx, Iyy, Izz) or the six tensor entries (Ixx, Iyy, Izz, Ixy, Iyz,
+    Ixz), see `inertia_matrix`.
     """
 
     name: str

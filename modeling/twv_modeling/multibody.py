@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from .derived import DerivedModel, Signal
-from .kinematics import AXES, Body, PlanarJoint, RevoluteJoint, vec3
+from .kinematics import Body, PlanarJoint, RevoluteJoint, axis_vector, inertia_matrix, vec3
 from .linsolve import solve_spd
 from .params import Param
 
@@ -59,7 +59,7 @@ class TorqueInput:
 
     input: str
     frame: str
-    axis: str
+    axis: str | tuple
     reaction: str | None = None
 
 
@@ -193,7 +193,7 @@ class _BodyKinematics:
 def _body_kinematics(kin: _Kinematics, body: Body) -> _BodyKinematics:
     fr = kin.frames[body.frame]
     c = vec3(body.centroid)
-    inertia = ca.diag(vec3(body.inertia))
+    inertia = inertia_matrix(body.inertia, f"body {body.name}")
     v_c = fr.velocity + ca.cross(fr.omega, fr.rot @ c)
     omega_body = fr.rot.T @ fr.omega
     origin, rot_nf = kin.position(body.frame)
@@ -208,7 +208,7 @@ def _input_power(kin: _Kinematics, m, u: dict) -> ca.SX:
     fr = kin.frames[m.frame]
     if isinstance(m, ForceInput):
         return u[m.input] * ca.dot(fr.rot @ vec3(m.direction), fr.velocity)
-    axis = fr.rot @ vec3(AXES[m.axis])
+    axis = fr.rot @ axis_vector(m.axis, f"torque input {m.input}")
     omega = fr.omega
     if m.reaction is not None:
         other = kin.frames[m.reaction]
@@ -222,6 +222,11 @@ def _check_rotor_bodies(system: MultibodySystem):
     for body in system.bodies:
         j = joints.get(body.frame)
         if isinstance(j, RevoluteJoint) and j.axisymmetric:
+            if not (isinstance(j.axis, str) and j.axis in "xyz") or len(body.inertia) != 3:
+                raise ModelError(
+                    f"body {body.name} on rotor {j.name}: a rotor spins about x, y or z of its "
+                    "frame and has principal inertias"
+                )
             axis = "xyz".index(j.axis)
             transverse = [body.inertia[i] for i in range(3) if i != axis]
             same = ca.is_equal(ca.SX(transverse[0]), ca.SX(transverse[1]), 2)
