@@ -167,6 +167,44 @@ class RevoluteJoint:
 
 
 @dataclass
+class PrismaticJoint:
+    """A slider: the child translates along a fixed unit axis of the parent frame (see
+    `axis_vector`), starting from `at`, without rotating. One coordinate (the displacement) and
+    its rate. Two of them and a hinge about z describe planar motion in inertial velocity
+    components, where rolling constraints have coordinate-dependent coefficients."""
+
+    name: str
+    parent: str
+    coord: str
+    speed: str
+    axis: str | tuple = "x"
+    at: tuple = ZERO3
+
+    @property
+    def coords(self):
+        return (self.coord,)
+
+    @property
+    def speeds(self):
+        return (self.speed,)
+
+    def rotation(self, q):
+        return ca.SX.eye(3)
+
+    def translation(self, q):
+        return vec3(self.at) + axis_vector(self.axis, f"joint {self.name}") * q[0]
+
+    def velocity_map(self, q):
+        return ca.SX.eye(1)
+
+    def twist(self, p):
+        return vec3(ZERO3), axis_vector(self.axis, f"joint {self.name}") * p[0]
+
+    def structure(self):
+        return _zeros3(1)
+
+
+@dataclass
 class Body:
     """A rigid body fixed in a joint's child frame.
 

@@ -24,7 +24,15 @@ from dataclasses import dataclass
 import casadi as ca
 
 from .derived import DerivedModel, Signal
-from .kinematics import Body, PlanarJoint, RevoluteJoint, axis_vector, inertia_matrix, vec3
+from .kinematics import (
+    Body,
+    PlanarJoint,
+    PrismaticJoint,
+    RevoluteJoint,
+    axis_vector,
+    inertia_matrix,
+    vec3,
+)
 from .linsolve import solve_spd
 from .params import Param
 
@@ -35,8 +43,11 @@ GROUND = "N"
 class Constraint:
     """A velocity constraint solved for one quasi-velocity.
 
-    `expression(speeds)` gives the dependent speed as a linear combination of the independent
-    ones (a dict name -> symbol); its coefficients may depend on parameters, not on coordinates.
+    `expression(symbols)` gives the dependent speed as a linear combination of the independent
+    ones; `symbols` maps the independent speed names and the coordinate names to their symbols.
+    The coefficients may depend on parameters and on coordinates (a rolling wheel described in
+    inertial velocity components: x_dot = R w_s cos(psi)); then the structure functions of the
+    new quasi-velocities get the derivative terms of the change of speeds.
     """
 
     dependent: str
@@ -70,7 +81,7 @@ class MultibodySystem:
     params: list[Param]
     coordinates: list[Signal]
     speeds: list[Signal]
-    joints: list[PlanarJoint | RevoluteJoint]
+    joints: list[PlanarJoint | RevoluteJoint | PrismaticJoint]
     bodies: list[Body]
     inputs: list[Signal]
     input_maps: list[ForceInput | TorqueInput]
@@ -284,7 +295,7 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
     independent = [s for s in speed_names if s not in dependent]
     cspeed = {d: ca.SX.sym(f"c_{d}") for d in dependent}
     full_of_new = dict(pf)
-    ind_syms = {s: pf[s] for s in independent}
+    ind_syms = {**q, **{s: pf[s] for s in independent}}
     for con in system.constraints:
         full_of_new[con.dependent] = con.expression(ind_syms) + cspeed[con.dependent]
     new_speeds = [pf[s] for s in independent] + [cspeed[d] for d in dependent]
@@ -292,12 +303,10 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
     pf_vec = ca.vertcat(*[pf[s] for s in speed_names])
     pf_expr = ca.vertcat(*[full_of_new[s] for s in speed_names])
     Tmat = ca.jacobian(pf_expr, p_new)
-    if ca.depends_on(Tmat, ca.vertcat(q_vec, p_new)):
-        raise ModelError(
-            "constraints must be linear in the speeds with coordinate-free coefficients"
-        )
+    if ca.depends_on(Tmat, p_new):
+        raise ModelError("constraints must be linear in the speeds")
     Tinv = _inverse_of_speed_change(speed_names, independent, system.constraints, ind_syms, pf)
-    gamma_new = _transform_structure(gamma, Tmat, Tinv, n)
+    gamma_new = _transform_structure(gamma, Tmat, Tinv, n, V_full @ Tmat, q_vec)
 
     def to_new(e):
         return ca.substitute(e, pf_vec, pf_expr)
@@ -410,8 +419,13 @@ def _inverse_of_speed_change(speed_names, independent, constraints, ind_syms, pf
     return ca.jacobian(ca.vertcat(*rows), pf_vec)
 
 
-def _transform_structure(gamma, Tmat, Tinv, n):
-    """Structure coefficients in the new speeds: g'^f_ac = Tinv_fe g^e_bd T_ba T_dc."""
+def _transform_structure(gamma, Tmat, Tinv, n, V_new, q_vec):
+    """Structure coefficients in the new speeds, X'_a = sum_b T_ba X_b:
+
+        g'^f_ac = Tinv_fe (g^e_bd T_ba T_dc + X'_a(T_ec) - X'_c(T_ea)),
+
+    the derivative terms present only when the change of speeds T depends on the coordinates
+    (X'_a(h) = dh/dq . V_new[:, a])."""
     out = [[[ca.SX(0) for _ in range(n)] for _ in range(n)] for _ in range(n)]
     entries = [
         (e, b, d, gamma[e][b][d])
@@ -420,11 +434,23 @@ def _transform_structure(gamma, Tmat, Tinv, n):
         for d in range(n)
         if not _zero(gamma[e][b][d])
     ]
+    moving = ca.depends_on(Tmat, q_vec)
+    if moving:
+        # derivative[e][a][c] = X'_a(T_ec) - X'_c(T_ea)
+        grads = [[ca.jacobian(Tmat[e, c], q_vec) for c in range(n)] for e in range(n)]
+        along = [[grads[e][c] @ V_new[:, a] for a in range(n)] for e in range(n) for c in range(n)]
     for f in range(n):
         for a in range(n):
             for c in range(n):
                 acc = ca.SX(0)
                 for e, b, d, val in entries:
                     acc = acc + Tinv[f, e] * val * Tmat[b, a] * Tmat[d, c]
+                if moving:
+                    for e in range(n):
+                        if _zero(Tinv[f, e]):
+                            continue
+                        term = along[e * n + c][a] - along[e * n + a][c]
+                        if not _zero(term):
+                            acc = acc + Tinv[f, e] * term
                 out[f][a][c] = acc
     return out
