@@ -56,6 +56,28 @@ class Constraint:
 
 
 @dataclass
+class RollingContact:
+    """A thin wheel rolling without slip on the ground plane (N's z = 0).
+
+    `wheel` is the wheel's rotor joint (`RevoluteJoint(..., axisymmetric=True)`): its frame's
+    origin is the wheel centre, its axis the axle, and the wheel's angular velocity includes the
+    spin. The contact point is P = C - R d with d the unit vector in the wheel plane closest to
+    the ground normal n, d = (n - (n.a) a)/|n - (n.a) a|; the wheel's material point there does
+    not move: v_C - R omega x d = 0. The two horizontal components are the no-slip conditions;
+    the vertical one is the rate of the contact condition (the wheel touching the ground), left
+    out when the description keeps the wheel on the ground by construction (a wheel whose centre
+    is placed at R above a frame that moves with the contact point). The conditions are solved
+    for the system's `contact_speeds`; a coordinate they constrain holonomically stays in the
+    state (its drift from the contact condition is the integrator's to keep small).
+    """
+
+    wheel: str
+    radius: object
+    touching_by_construction: bool = False
+    description: str = ""
+
+
+@dataclass
 class ForceInput:
     """Input force along `direction` (frame components) at the origin of `frame`."""
 
@@ -87,6 +109,8 @@ class MultibodySystem:
     input_maps: list[ForceInput | TorqueInput]
     gravity: str = "g"
     constraints: tuple[Constraint, ...] = ()
+    contacts: tuple[RollingContact, ...] = ()
+    contact_speeds: tuple[str, ...] = ()
 
 
 class ModelError(ValueError):
@@ -290,13 +314,17 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
     ang = sum(b.ang for b in bodies)
     power = sum(_input_power(kin, m, u) for m in system.input_maps)
 
+    constraints = list(system.constraints) + _contact_constraints(
+        system, kin, q, pf, [c.dependent for c in system.constraints]
+    )
+
     # Change of quasi-velocities: independent speeds plus one constraint speed per constraint.
-    dependent = [c.dependent for c in system.constraints]
+    dependent = [c.dependent for c in constraints]
     independent = [s for s in speed_names if s not in dependent]
     cspeed = {d: ca.SX.sym(f"c_{d}") for d in dependent}
     full_of_new = dict(pf)
     ind_syms = {**q, **{s: pf[s] for s in independent}}
-    for con in system.constraints:
+    for con in constraints:
         full_of_new[con.dependent] = con.expression(ind_syms) + cspeed[con.dependent]
     new_speeds = [pf[s] for s in independent] + [cspeed[d] for d in dependent]
     p_new = ca.vertcat(*new_speeds)
@@ -305,7 +333,7 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
     Tmat = ca.jacobian(pf_expr, p_new)
     if ca.depends_on(Tmat, p_new):
         raise ModelError("constraints must be linear in the speeds")
-    Tinv = _inverse_of_speed_change(speed_names, independent, system.constraints, ind_syms, pf)
+    Tinv = _inverse_of_speed_change(speed_names, independent, constraints, ind_syms, pf)
     gamma_new = _transform_structure(gamma, Tmat, Tinv, n, V_full @ Tmat, q_vec)
 
     def to_new(e):
@@ -397,11 +425,68 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
             "ignorable_coordinates": rotor_coords,
             "speeds": independent,
             "constraints": [
-                {"dependent": c.dependent, "description": c.description} for c in system.constraints
+                {"dependent": c.dependent, "description": c.description} for c in constraints
             ],
             "mass_matrix_solve": "symbolic LDL^T in f (structural zeros kept)",
         },
     )
+
+
+def _contact_constraints(system, kin, q, pf, already_dependent) -> list[Constraint]:
+    """The rolling contacts' conditions solved for `contact_speeds` (with the explicit
+    constraints' dependent speeds substituted first), as constraints on the independent speeds."""
+    if not system.contacts:
+        if system.contact_speeds:
+            raise ModelError("contact_speeds given without contacts")
+        return []
+    joints = {j.name: j for j in system.joints}
+    rows = []
+    for contact in system.contacts:
+        j = joints.get(contact.wheel)
+        if not (isinstance(j, RevoluteJoint) and j.axisymmetric):
+            raise ModelError(f"contact on {contact.wheel}: the wheel must be a rotor joint")
+        frame = kin.frames[contact.wheel]
+        _, rot_ng = kin.position(frame.ref) if frame.ref != GROUND else (None, ca.SX.eye(3))
+        normal = rot_ng.T @ vec3((0, 0, 1))  # the ground normal in the reference components
+        axle = frame.rot @ axis_vector(j.axis, f"wheel {j.name}")
+        down = normal - ca.dot(normal, axle) * axle
+        d = down / ca.norm_2(down)
+        v_p = frame.velocity - contact.radius * ca.cross(frame.omega, d)
+        # Two horizontal directions (the reference frame's x and y when it is yawed only).
+        e1 = ca.cross(vec3((0, 1, 0)), normal)
+        e2 = ca.cross(normal, e1)
+        rows += [ca.dot(v_p, e1), ca.dot(v_p, e2)]
+        if not contact.touching_by_construction:
+            rows.append(ca.dot(v_p, normal))
+    speeds = [s.name for s in system.speeds]
+    solved_for = list(system.contact_speeds)
+    if len(solved_for) != len(rows):
+        raise ModelError(
+            f"the contacts give {len(rows)} conditions; name as many contact_speeds, "
+            f"not {len(solved_for)}"
+        )
+    overlap = [s for s in solved_for if s in already_dependent or s not in speeds]
+    if overlap:
+        raise ModelError(f"contact_speeds {', '.join(overlap)}: not free speeds of the system")
+    # Substitute the explicit constraints' dependent speeds, then E = A_D p_D + A_I p_I = 0.
+    explicit = {c.dependent: c for c in system.constraints}
+    free = [s for s in speeds if s not in explicit and s not in solved_for]
+    scope = {**q, **{s: pf[s] for s in free}}
+    sub_from = [pf[d] for d in explicit]
+    sub_to = [explicit[d].expression(scope) for d in explicit]
+    eqs = ca.vertcat(*rows)
+    if sub_from:
+        eqs = ca.substitute(eqs, ca.vertcat(*sub_from), ca.vertcat(*sub_to))
+    p_d = ca.vertcat(*[pf[s] for s in solved_for])
+    p_i = ca.vertcat(*[pf[s] for s in free])
+    a_d, a_i = ca.jacobian(eqs, p_d), ca.jacobian(eqs, p_i)
+    if ca.depends_on(ca.vertcat(a_d.reshape((-1, 1)), a_i.reshape((-1, 1))), ca.vertcat(p_d, p_i)):
+        raise ModelError("the rolling conditions are not linear in the speeds")
+    solution = ca.solve(a_d, -(a_i @ p_i))
+    return [
+        Constraint(name, lambda _s, e=solution[k]: e, f"rolling contact: {name}")
+        for k, name in enumerate(solved_for)
+    ]
 
 
 def _zero(e) -> bool:
