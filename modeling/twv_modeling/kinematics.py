@@ -120,58 +120,8 @@ class PlanarJoint:
 
 
 @dataclass
-class RevoluteJoint:
-    """A hinge about a fixed axis through a point of the parent frame: "x", "y", "z" or any unit
-    vector in the parent frame (see `axis_vector`), through `at`.
-
-    One coordinate (the angle) and one quasi-velocity (its rate). `axisymmetric` marks a rotor
-    (a wheel): the child's inertia is symmetric about the axis and its centroid lies on it, so the
-    kinetic energy does not depend on the angle, which is then an ignorable coordinate. The child
-    frame of such a joint is the non-spinning carrier; the spin only adds to the angular velocity.
-    """
-
-    name: str
-    parent: str
-    coord: str
-    speed: str
-    axis: str | tuple = "y"
-    at: tuple = ZERO3
-    axisymmetric: bool = False
-
-    @property
-    def coords(self):
-        return (self.coord,)
-
-    @property
-    def speeds(self):
-        return (self.speed,)
-
-    def rotation(self, q):
-        if self.axisymmetric:
-            return ca.SX.eye(3)
-        if isinstance(self.axis, str) and self.axis in ROTATIONS:
-            return ROTATIONS[self.axis](q[0])
-        return rot_about(axis_vector(self.axis, f"joint {self.name}"), q[0])
-
-    def translation(self, q):
-        return vec3(self.at)
-
-    def velocity_map(self, q):
-        return ca.SX.eye(1)
-
-    def twist(self, p):
-        return axis_vector(self.axis, f"joint {self.name}") * p[0], vec3(ZERO3)
-
-    def structure(self):
-        return _zeros3(1)
-
-
-@dataclass
-class PrismaticJoint:
-    """A slider: the child translates along a fixed unit axis of the parent frame (see
-    `axis_vector`), starting from `at`, without rotating. One coordinate (the displacement) and
-    its rate. Two of them and a hinge about z describe planar motion in inertial velocity
-    components, where rolling constraints have coordinate-dependent coefficients."""
+class _OneAxisJoint:
+    """What a hinge and a slider share: one coordinate along or about one axis through `at`."""
 
     name: str
     parent: str
@@ -188,20 +138,56 @@ class PrismaticJoint:
     def speeds(self):
         return (self.speed,)
 
+    def velocity_map(self, q):
+        return ca.SX.eye(1)
+
+    def structure(self):
+        return _zeros3(1)
+
+
+@dataclass
+class RevoluteJoint(_OneAxisJoint):
+    """A hinge about a fixed axis through a point of the parent frame: "x", "y", "z" or any unit
+    vector in the parent frame (see `axis_vector`), through `at`.
+
+    One coordinate (the angle) and one quasi-velocity (its rate). `axisymmetric` marks a rotor
+    (a wheel): the child's inertia is symmetric about the axis and its centroid lies on it, so the
+    kinetic energy does not depend on the angle, which is then an ignorable coordinate. The child
+    frame of such a joint is the non-spinning carrier; the spin only adds to the angular velocity.
+    """
+
+    axis: str | tuple = "y"
+    axisymmetric: bool = False
+
+    def rotation(self, q):
+        if self.axisymmetric:
+            return ca.SX.eye(3)
+        if isinstance(self.axis, str) and self.axis in ROTATIONS:
+            return ROTATIONS[self.axis](q[0])
+        return rot_about(axis_vector(self.axis, f"joint {self.name}"), q[0])
+
+    def translation(self, q):
+        return vec3(self.at)
+
+    def twist(self, p):
+        return axis_vector(self.axis, f"joint {self.name}") * p[0], vec3(ZERO3)
+
+
+@dataclass
+class PrismaticJoint(_OneAxisJoint):
+    """A slider: the child translates along a fixed unit axis of the parent frame (see
+    `axis_vector`), starting from `at`, without rotating. One coordinate (the displacement) and
+    its rate. Two of them and a hinge about z describe planar motion in inertial velocity
+    components, where rolling constraints have coordinate-dependent coefficients."""
+
     def rotation(self, q):
         return ca.SX.eye(3)
 
     def translation(self, q):
         return vec3(self.at) + axis_vector(self.axis, f"joint {self.name}") * q[0]
 
-    def velocity_map(self, q):
-        return ca.SX.eye(1)
-
     def twist(self, p):
         return vec3(ZERO3), axis_vector(self.axis, f"joint {self.name}") * p[0]
-
-    def structure(self):
-        return _zeros3(1)
 
 
 @dataclass

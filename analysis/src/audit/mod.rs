@@ -6,7 +6,7 @@
 
 pub(crate) mod compare;
 mod physics;
-mod report;
+pub(crate) mod report;
 mod sampling;
 mod simulation;
 

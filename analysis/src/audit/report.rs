@@ -23,6 +23,24 @@ pub struct AuditReport {
     pub failures: Vec<String>,
 }
 
+/// The per-quantity rows of an audit's table (the built-in audit's and a hand file's).
+pub(crate) fn quantity_table(quantities: &[QuantityError], tolerance: f64) -> String {
+    let mut s = format!(
+        "  {:<8} {:>12} {:>12}  {:<22} status\n",
+        "quantity", "max abs", "max rel", "worst entry"
+    );
+    for q in quantities {
+        // Asked this way round so that a NaN error fails.
+        let ok = if q.max_rel <= tolerance { "ok" } else { "FAIL" };
+        let _ = writeln!(
+            s,
+            "  {:<8} {:>12.3e} {:>12.3e}  {:<22} {ok}",
+            q.quantity, q.max_abs, q.max_rel, q.worst_entry
+        );
+    }
+    s
+}
+
 fn format_state(x: &[f64]) -> String {
     let parts: Vec<String> = x.iter().map(|v| format!("{v:.6}")).collect();
     format!("[{}]", parts.join(", "))
@@ -79,23 +97,7 @@ impl AuditReport {
             "audit {}: generated vs hand model, {} samples (seed {}), tolerance {:.0e} relative",
             self.model, self.samples, self.seed, self.tolerance
         );
-        let _ = writeln!(
-            s,
-            "  {:<8} {:>12} {:>12}  {:<22} status",
-            "quantity", "max abs", "max rel", "worst entry"
-        );
-        for q in &self.quantities {
-            let ok = if q.max_rel <= self.tolerance {
-                "ok"
-            } else {
-                "FAIL"
-            };
-            let _ = writeln!(
-                s,
-                "  {:<8} {:>12.3e} {:>12.3e}  {:<22} {ok}",
-                q.quantity, q.max_abs, q.max_rel, q.worst_entry
-            );
-        }
+        s.push_str(&quantity_table(&self.quantities, self.tolerance));
         let _ = writeln!(
             s,
             "  {:<34} {:>12} {:>10}  status",

@@ -11,6 +11,7 @@ use super::file::{Entry, HandForm, HandModel};
 use super::from_ir::entry_forms;
 use super::normal::{normal_form, Names, Poly};
 use crate::audit::compare::{matrix_labels, vector_labels, Tally};
+use crate::audit::report::quantity_table;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -198,36 +199,29 @@ impl Hand<'_> {
     }
 }
 
-/// The hand entry of each label of a mechanical quantity, with the IR function and output that
-/// derive it (for the symbolic difference).
+/// The hand entries of one quantity (an IR function of the same name), with their labels.
 struct Quantity<'a> {
     name: &'static str,
     labels: Vec<String>,
     hand: Vec<&'a Entry>,
-    function: &'static str,
 }
 
 fn quantities<'a>(form: &'a HandForm, states: &[String], speeds: &[String]) -> Vec<Quantity<'a>> {
-    let q = |name, labels, hand, function| Quantity {
+    let (states, speeds) = (refs(states), refs(speeds));
+    let vector = |name, names: &[&str], hand: Vec<&'a Entry>| Quantity {
         name,
-        labels,
+        labels: vector_labels(name, names),
         hand,
-        function,
+    };
+    let matrix = |name, names: &[&str], hand: Vec<&'a Entry>| Quantity {
+        name,
+        labels: matrix_labels(name, names, names),
+        hand,
     };
     match form {
         HandForm::Explicit { f } => vec![
-            q(
-                "f",
-                vector_labels("f", &refs(states)),
-                f.iter().collect(),
-                "f",
-            ),
-            q(
-                "jac_x",
-                matrix_labels("jac_x", &refs(states), &refs(states)),
-                vec![],
-                "jac_x",
-            ),
+            vector("f", &states, f.iter().collect()),
+            matrix("jac_x", &states, vec![]),
         ],
         HandForm::Mechanical {
             mass,
@@ -237,43 +231,13 @@ fn quantities<'a>(form: &'a HandForm, states: &[String], speeds: &[String]) -> V
             qdot,
             ..
         } => vec![
-            q(
-                "M",
-                matrix_labels("M", &refs(speeds), &refs(speeds)),
-                mass.iter().flatten().collect(),
-                "M",
-            ),
-            q(
-                "Cp",
-                vector_labels("Cp", &refs(speeds)),
-                velocity.iter().collect(),
-                "Cp",
-            ),
-            q(
-                "F",
-                vector_labels("F", &refs(speeds)),
-                gravity.iter().collect(),
-                "F",
-            ),
-            q(
-                "Q",
-                vector_labels("Q", &refs(speeds)),
-                inputs.iter().collect(),
-                "Q",
-            ),
+            matrix("M", &speeds, mass.iter().flatten().collect()),
+            vector("Cp", &speeds, velocity.iter().collect()),
+            vector("F", &speeds, gravity.iter().collect()),
+            vector("Q", &speeds, inputs.iter().collect()),
             // The coordinate rows of f are the file's q̇; its speed rows have no one formula.
-            q(
-                "f",
-                vector_labels("f", &refs(states)),
-                qdot.iter().collect(),
-                "f",
-            ),
-            q(
-                "jac_x",
-                matrix_labels("jac_x", &refs(states), &refs(states)),
-                vec![],
-                "jac_x",
-            ),
+            vector("f", &states, qdot.iter().collect()),
+            matrix("jac_x", &states, vec![]),
         ],
     }
 }
@@ -369,7 +333,7 @@ pub fn audit_hand_model(
         let p = varied.as_deref().unwrap_or(params);
         let args = Args { x, u, p };
         for (i, q) in plan.iter().enumerate() {
-            let want = derived.dense(q.function, x, u, p)?;
+            let want = derived.dense(q.name, x, u, p)?;
             let got: Vec<f64> = match q.name {
                 "f" => evaluator.f(x, u, p),
                 "jac_x" => evaluator.jac_x(x, u, p),
@@ -390,7 +354,7 @@ pub fn audit_hand_model(
     };
     let mut disagreements = Vec::new();
     for ((quantity, q), given) in quantities.iter().zip(&plan).zip(&at_given) {
-        let function = ir.function(q.function);
+        let function = ir.function(q.name);
         let mut forms = None;
         for (index, entry) in quantity.entries.iter().enumerate() {
             // Asked this way round so that a NaN error disagrees.
@@ -501,23 +465,7 @@ impl HandAuditReport {
             self.param_spread,
             self.tolerance
         );
-        let _ = writeln!(
-            s,
-            "  {:<8} {:>12} {:>12}  {:<22} status",
-            "quantity", "max abs", "max rel", "worst entry"
-        );
-        for q in &self.quantities {
-            let ok = if q.max_rel <= self.tolerance {
-                "ok"
-            } else {
-                "FAIL"
-            };
-            let _ = writeln!(
-                s,
-                "  {:<8} {:>12.3e} {:>12.3e}  {:<22} {ok}",
-                q.quantity, q.max_abs, q.max_rel, q.worst_entry
-            );
-        }
+        s.push_str(&quantity_table(&self.quantities, self.tolerance));
         let (Some(first), Some(worst)) = (
             self.disagreements.first(),
             self.disagreements

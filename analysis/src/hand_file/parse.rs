@@ -113,32 +113,32 @@ impl Parser<'_> {
         }
     }
 
-    fn sum(&mut self) -> Result<Expr, ParseError> {
-        let mut acc = self.product()?;
-        while let Some(op @ ('+' | '-')) = self.peek_op() {
+    /// One left-associative level: `next (op next)*` for the operators `ops`.
+    fn level(
+        &mut self,
+        ops: [char; 2],
+        next: fn(&mut Self) -> Result<Expr, ParseError>,
+    ) -> Result<Expr, ParseError> {
+        let mut acc = next(self)?;
+        while let Some(op) = self.peek_op().filter(|c| ops.contains(c)) {
             self.at += 1;
-            let rhs = self.product()?;
-            acc = if op == '+' {
-                Expr::sum(acc, rhs)
-            } else {
-                Expr::Sub(Box::new(acc), Box::new(rhs))
+            let (a, b) = (Box::new(acc), Box::new(next(self)?));
+            acc = match op {
+                '+' => Expr::Add(a, b),
+                '-' => Expr::Sub(a, b),
+                '*' => Expr::Mul(a, b),
+                _ => Expr::Div(a, b),
             };
         }
         Ok(acc)
     }
 
+    fn sum(&mut self) -> Result<Expr, ParseError> {
+        self.level(['+', '-'], Self::product)
+    }
+
     fn product(&mut self) -> Result<Expr, ParseError> {
-        let mut acc = self.unary()?;
-        while let Some(op @ ('*' | '/')) = self.peek_op() {
-            self.at += 1;
-            let rhs = self.unary()?;
-            acc = if op == '*' {
-                Expr::product(acc, rhs)
-            } else {
-                Expr::Div(Box::new(acc), Box::new(rhs))
-            };
-        }
-        Ok(acc)
+        self.level(['*', '/'], Self::unary)
     }
 
     fn unary(&mut self) -> Result<Expr, ParseError> {
