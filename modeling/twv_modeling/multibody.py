@@ -333,54 +333,62 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
     Tmat = ca.jacobian(pf_expr, p_new)
     if ca.depends_on(Tmat, p_new):
         raise ModelError("constraints must be linear in the speeds")
-    Tinv = _inverse_of_speed_change(speed_names, independent, constraints, ind_syms, pf)
-    gamma_new = _transform_structure(gamma, Tmat, Tinv, n, V_full @ Tmat, q_vec)
-
-    def to_new(e):
-        return ca.substitute(e, pf_vec, pf_expr)
-
-    power_new = to_new(power)
-    lin_new, ang_new = to_new(lin), to_new(ang)
-    V_new = V_full @ Tmat
-
-    # Kinetic energy and its derivatives by the chain rule, body by body (v and omega are linear
-    # in p): M = sum m Jv^T Jv + Jw^T I Jw, P = dT/dp = M p, dT/dq = sum m (dv/dq)^T v + ...
-    M_full, P, dT_dq, T_new = ca.SX(n, n), ca.SX(n, 1), ca.SX(n, 1), 0
-    for b in bodies:
-        v, w = to_new(b.v), to_new(b.omega)
-        Iw = b.inertia @ w
-        Jv, Jw = ca.jacobian(v, p_new), ca.jacobian(w, p_new)
-        M_full = M_full + b.mass * (Jv.T @ Jv) + Jw.T @ (b.inertia @ Jw)
-        P = P + b.mass * (Jv.T @ v) + Jw.T @ Iw
-        dT_dq = dT_dq + b.mass * (ca.jacobian(v, q_vec).T @ v) + ca.jacobian(w, q_vec).T @ Iw
-        T_new = T_new + 0.5 * b.mass * ca.dot(v, v) + 0.5 * ca.dot(w, Iw)
-    qdot = V_new @ p_new
-    Cp_full = ca.jacobian(P, q_vec) @ qdot - V_new.T @ dT_dq
-    for k in range(n):
-        term = 0
-        for b in range(n):
-            for j in range(n):
-                if not _zero(gamma_new[b][j][k]):
-                    term = term + gamma_new[b][j][k] * p_new[j] * P[b]
-        Cp_full[k] = Cp_full[k] - term
-    F_full = V_new.T @ ca.gradient(U, q_vec)
-    Q_full = ca.gradient(power_new, p_new)
-
-    # Project onto the admissible speeds and only then impose the constraints (c = 0).
     m = len(independent)
     c_vec = ca.vertcat(*[cspeed[d] for d in dependent]) if dependent else ca.SX(0, 1)
 
     def on_constraint(e):
         return ca.substitute(e, c_vec, ca.SX.zeros(c_vec.numel())) if dependent else e
 
+    if ca.depends_on(Tmat, q_vec):
+        # Coefficients that depend on the configuration: the unconstrained equations projected
+        # onto the admissible speeds (d'Alembert), p = T_I(q) p_ind, p_dot = T_I p_ind_dot +
+        # T_I_dot p_ind. Equivalent to the change of quasi-velocities below with the structure
+        # functions' derivative terms, and with far smaller expressions (test_rolling_disc.py
+        # derives a disc both ways).
+        M_u, Cp_u, T_u, qdot_u = _hamel(bodies, lambda e: e, pf_vec, q_vec, V_full, gamma)
+        pf_on = on_constraint(pf_expr)
+        p_ind = ca.vertcat(*[pf[s] for s in independent])
+        T_I = ca.jacobian(pf_on, p_ind)
+
+        def on(e):
+            return ca.substitute(e, pf_vec, pf_on)
+
+        qdot = on(qdot_u)
+        T_I_dot_p = ca.jacobian(pf_on, q_vec) @ qdot
+        M_c = T_I.T @ M_u @ T_I
+        Cp_c = T_I.T @ (M_u @ T_I_dot_p + on(Cp_u))
+        F_c = T_I.T @ (V_full.T @ ca.gradient(U, q_vec))
+        Q_c = T_I.T @ on(ca.gradient(power, pf_vec))
+        energy_c = on(T_u) + U
+        momentum_c = on(ca.vertcat(lin[0], lin[1], ang))
+    else:
+        # Coordinate-free coefficients: Hamel's equations in the new quasi-velocities (the
+        # constraint speeds among them), projected, and only then the constraint speeds set to 0.
+        Tinv = _inverse_of_speed_change(speed_names, independent, constraints, ind_syms, pf)
+        gamma_new = _transform_structure(gamma, Tmat, Tinv, n)
+
+        def to_new(e):
+            return ca.substitute(e, pf_vec, pf_expr)
+
+        V_new = V_full @ Tmat
+        M_full, Cp_full, T_new, qdot_new = _hamel(bodies, to_new, p_new, q_vec, V_new, gamma_new)
+        qdot = on_constraint(qdot_new)
+        M_c = on_constraint(M_full[:m, :m])
+        Cp_c = on_constraint(Cp_full[:m])
+        F_c = on_constraint((V_new.T @ ca.gradient(U, q_vec))[:m])
+        Q_c = on_constraint(ca.gradient(to_new(power), p_new)[:m])
+        energy_c = on_constraint(T_new + U)
+        lin_new, ang_new = to_new(lin), to_new(ang)
+        momentum_c = on_constraint(ca.vertcat(lin_new[0], lin_new[1], ang_new))
+
     # Merging common subexpressions also cancels exact repeats (a - a = 0), so entries that
     # vanish identically, such as the left/right wheel cross terms, become structural zeros.
-    M = ca.cse(on_constraint(M_full[:m, :m]))
-    Cp = ca.cse(on_constraint(Cp_full[:m]))
-    F = ca.cse(on_constraint(F_full[:m]))
-    Q = ca.cse(on_constraint(Q_full[:m]))
-    energy = ca.cse(on_constraint(T_new + U))
-    momentum = ca.cse(on_constraint(ca.vertcat(lin_new[0], lin_new[1], ang_new)))
+    M = ca.cse(M_c)
+    Cp = ca.cse(Cp_c)
+    F = ca.cse(F_c)
+    Q = ca.cse(Q_c)
+    energy = ca.cse(energy_c)
+    momentum = ca.cse(momentum_c)
 
     # Ignorable coordinates (rotor angles) leave the state; check that nothing depends on them.
     rotor_coords = [
@@ -394,7 +402,7 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
 
     p_ind = p_new[:m]
     rows = [coord_names.index(c) for c in state_coords]
-    qdot_state = on_constraint(ca.vertcat(*[qdot[r] for r in rows]))
+    qdot_state = ca.vertcat(*[qdot[r] for r in rows])
     pdot = solve_spd(M, Q - Cp - F)
     x = ca.vertcat(*[q[c] for c in state_coords], p_ind)
 
@@ -430,6 +438,33 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
             "mass_matrix_solve": "symbolic LDL^T in f (structural zeros kept)",
         },
     )
+
+
+def _hamel(bodies, speed_of, p_vec, q_vec, V, gamma):
+    """Hamel's equations' M, Cp = C(q, p) p and the kinetic energy T in the quasi-velocities
+    `p_vec` (q_dot = V p, structure coefficients `gamma`), the body velocities written in them by
+    `speed_of`; also q_dot. v and omega are linear in p: M = sum m Jv^T Jv + Jw^T I Jw,
+    P = dT/dp = M p, dT/dq = sum m (dv/dq)^T v + (dw/dq)^T I w, by the chain rule body by body."""
+    n = p_vec.numel()
+    M, P, dT_dq, T = ca.SX(n, n), ca.SX(n, 1), ca.SX(n, 1), 0
+    for b in bodies:
+        v, w = speed_of(b.v), speed_of(b.omega)
+        Iw = b.inertia @ w
+        Jv, Jw = ca.jacobian(v, p_vec), ca.jacobian(w, p_vec)
+        M = M + b.mass * (Jv.T @ Jv) + Jw.T @ (b.inertia @ Jw)
+        P = P + b.mass * (Jv.T @ v) + Jw.T @ Iw
+        dT_dq = dT_dq + b.mass * (ca.jacobian(v, q_vec).T @ v) + ca.jacobian(w, q_vec).T @ Iw
+        T = T + 0.5 * b.mass * ca.dot(v, v) + 0.5 * ca.dot(w, Iw)
+    qdot = V @ p_vec
+    Cp = ca.jacobian(P, q_vec) @ qdot - V.T @ dT_dq
+    for k in range(n):
+        term = 0
+        for b in range(n):
+            for j in range(n):
+                if not _zero(gamma[b][j][k]):
+                    term = term + gamma[b][j][k] * p_vec[j] * P[b]
+        Cp[k] = Cp[k] - term
+    return M, Cp, T, qdot
 
 
 def _contact_constraints(system, kin, q, pf, already_dependent) -> list[Constraint]:
@@ -504,13 +539,9 @@ def _inverse_of_speed_change(speed_names, independent, constraints, ind_syms, pf
     return ca.jacobian(ca.vertcat(*rows), pf_vec)
 
 
-def _transform_structure(gamma, Tmat, Tinv, n, V_new, q_vec):
-    """Structure coefficients in the new speeds, X'_a = sum_b T_ba X_b:
-
-        g'^f_ac = Tinv_fe (g^e_bd T_ba T_dc + X'_a(T_ec) - X'_c(T_ea)),
-
-    the derivative terms present only when the change of speeds T depends on the coordinates
-    (X'_a(h) = dh/dq . V_new[:, a])."""
+def _transform_structure(gamma, Tmat, Tinv, n):
+    """Structure coefficients in the new speeds: g'^f_ac = Tinv_fe g^e_bd T_ba T_dc (a
+    coordinate-free change of speeds; coordinate-dependent ones are projected instead)."""
     out = [[[ca.SX(0) for _ in range(n)] for _ in range(n)] for _ in range(n)]
     entries = [
         (e, b, d, gamma[e][b][d])
@@ -519,23 +550,11 @@ def _transform_structure(gamma, Tmat, Tinv, n, V_new, q_vec):
         for d in range(n)
         if not _zero(gamma[e][b][d])
     ]
-    moving = ca.depends_on(Tmat, q_vec)
-    if moving:
-        # derivative[e][a][c] = X'_a(T_ec) - X'_c(T_ea)
-        grads = [[ca.jacobian(Tmat[e, c], q_vec) for c in range(n)] for e in range(n)]
-        along = [[grads[e][c] @ V_new[:, a] for a in range(n)] for e in range(n) for c in range(n)]
     for f in range(n):
         for a in range(n):
             for c in range(n):
                 acc = ca.SX(0)
                 for e, b, d, val in entries:
                     acc = acc + Tinv[f, e] * val * Tmat[b, a] * Tmat[d, c]
-                if moving:
-                    for e in range(n):
-                        if _zero(Tinv[f, e]):
-                            continue
-                        term = along[e * n + c][a] - along[e * n + a][c]
-                        if not _zero(term):
-                            acc = acc + Tinv[f, e] * term
                 out[f][a][c] = acc
     return out
