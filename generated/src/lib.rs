@@ -7,7 +7,8 @@
 //!   `segway7` from `vehicles/segway.toml`, the explicit models from their IR defaults). Editing
 //!   one of those TOML files (or an IR file) and running `cargo build` rebuilds this crate with
 //!   the new constants: the macro `include_bytes!`es every file it reads.
-//! - The IR text of each model ([`ir_json`], [`MODELS`]) so a binary can embed it.
+//! - The IR text of each model ([`ir_json`], [`MODELS`]) so a binary can embed it, and of the
+//!   shipped models that run on the interpreter ([`INTERPRETED`]: the Whipple bicycle).
 //! - [`visit`]: dispatch a model name to its concrete type without trait objects.
 
 twv_macros::twv_model!(ir = "ir/vehicle8.json", name = Vehicle8);
@@ -52,7 +53,12 @@ pub const MODELS: [(&str, &str); 5] = [
     ("henon_heiles", include_str!("../ir/henon_heiles.json")),
 ];
 
-/// The IR text of a shipped model.
+/// (model name, IR file text) of the shipped models that run on the IR interpreter instead of
+/// generated code: their Jacobians are too large to be worth compiling twice (the Whipple
+/// bicycle's ∂f/∂x has 33k operations); the interpreter gives the generated code's bits.
+pub const INTERPRETED: [(&str, &str); 1] = [("whipple", include_str!("../ir/whipple.json"))];
+
+/// The IR text of a shipped model with generated code.
 pub fn ir_json(name: &str) -> Option<&'static str> {
     MODELS
         .iter()

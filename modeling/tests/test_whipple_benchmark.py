@@ -5,37 +5,27 @@ Table 2 eigenvalues and self-stable speed range, computed here from their Table 
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from twv_modeling.whipple_benchmark import DEFAULT_FILE, benchmark_matrices, read_parameters
 
-# Meijaard et al. (2007), section 5: the matrices at the benchmark parameters (K0 without g).
-PUBLISHED = {
-    "M": [[80.81722, 2.31941332208709], [2.31941332208709, 0.29784188199686]],
-    "C1": [[0.0, 33.86641391492494], [-0.85035641456978, 1.68540397397560]],
-    "K0": [[-80.95, -2.59951685249872], [-2.59951685249872, -0.80329488458618]],
-    "K2": [[0.0, 76.59734589573222], [0.0, 2.65431523794604]],
-}
-
-# Table 2 (b, c): the eigenvalues at v = 0, 1, ..., 10 m/s; at v >= 1: castering, capsize and the
-# weave pair (real part ± imaginary part).
+# Meijaard et al. (2007): the eq. (5.4) matrices at the benchmark parameters (K0 without g),
+# Table 2's eigenvalues at v = 0, 1, ..., 10 m/s (castering, capsize and the weave pair: a
+# complex entry stands for its conjugate pair) and its weave and capsize speeds. One file for
+# the Python and the Rust tests.
+REFERENCE = json.loads(
+    (Path(__file__).resolve().parents[2] / "tests" / "data" / "meijaard2007.json").read_text()
+)
+PUBLISHED = {k: REFERENCE[k] for k in ("M", "C1", "K0", "K2")}
 TABLE2 = {
-    0: [-5.53094371765393, -3.13164324790656, 3.13164324790656, 5.53094371765393],
-    1: [-7.11008014637442, -3.13423125066578, 3.52696170990070 + 0.80774027519930j],
-    2: [-8.67387984831735, -3.07158645641514, 2.68234517512745 + 1.68066296590675j],
-    3: [-10.35101467245920, -2.63366137253667, 1.70675605663975 + 2.31582447384325j],
-    4: [-12.15861426576450, -1.42944427361326, 0.41325331521125 + 3.07910818603206j],
-    5: [-14.07838969279820, -0.32286642900409, -0.77534188219585 + 4.46486771378823j],
-    6: [-16.08537123098030, -0.00406690076970, -1.52644486584142 + 5.87673060598709j],
-    7: [-18.15788466125262, 0.10268170574766, -2.13875644258362 + 7.19525913329805j],
-    8: [-20.27940894394569, 0.14327879765713, -2.69348683581097 + 8.46037971396931j],
-    9: [-22.43788559040858, 0.15790184030917, -3.21675402252485 + 9.69377351531791j],
-    10: [-24.62459635017404, 0.16105338653172, -3.72016840437287 + 10.90681139476287j],
+    int(v): [complex(re, im) if im else re for re, im in row]
+    for v, row in REFERENCE["table2"].items()
 }
-
-# Table 2 (a): the weave and capsize speeds bounding the self-stable range [m/s].
-WEAVE, CAPSIZE = 4.29238253634111, 6.02426201538837
+WEAVE, CAPSIZE = REFERENCE["weave_speed"], REFERENCE["capsize_speed"]
 
 
 @pytest.fixture(scope="module")

@@ -74,7 +74,7 @@ BINARY = {
     "if_else_zero",
     "hypot",
 }
-MECHANICAL_PARTS = ("M", "Cp", "F", "Q", "energy", "momentum")
+MECHANICAL_PARTS = ("M", "Cp", "F", "Q", "energy", "momentum", "steady")
 
 
 class IRExportError(ValueError):

@@ -78,6 +78,18 @@ class RollingContact:
 
 
 @dataclass
+class SteadyMotion:
+    """Straight running at speed v, an equilibrium of the state's non-drifting part: every
+    state zero except `speed_state` = v * `per_unit_speed` (a parameter expression, e.g.
+    1 / r_R for a rear wheel's spin). `modes` are the states whose linearisation about it is
+    studied against speed (`twv linear --speed`): the bicycle's lean and steer."""
+
+    speed_state: str
+    per_unit_speed: object
+    modes: tuple[str, ...]
+
+
+@dataclass
 class ForceInput:
     """Input force along `direction` (frame components) at the origin of `frame`."""
 
@@ -111,6 +123,7 @@ class MultibodySystem:
     constraints: tuple[Constraint, ...] = ()
     contacts: tuple[RollingContact, ...] = ()
     contact_speeds: tuple[str, ...] = ()
+    steady_motion: SteadyMotion | None = None
 
 
 class ModelError(ValueError):
@@ -409,6 +422,18 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
     states = [c for c in system.coordinates if c.name in state_coords] + [
         s for s in system.speeds if s.name in independent
     ]
+    expressions = {
+        "f": ca.vertcat(qdot_state, pdot),
+        "M": M,
+        "Cp": Cp,
+        "F": F,
+        "Q": Q,
+        "energy": energy,
+        "momentum": momentum,
+    }
+    header_extra = {}
+    if system.steady_motion is not None:
+        expressions["steady"], header_extra = _steady(system.steady_motion, states)
     return DerivedModel(
         name=system.name,
         kind="multibody",
@@ -419,15 +444,7 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
         x=x,
         u=u_vec,
         p=p_vec,
-        expressions={
-            "f": ca.vertcat(qdot_state, pdot),
-            "M": M,
-            "Cp": Cp,
-            "F": F,
-            "Q": Q,
-            "energy": energy,
-            "momentum": momentum,
-        },
+        expressions=expressions,
         header={
             "coordinates": state_coords,
             "ignorable_coordinates": rotor_coords,
@@ -436,8 +453,22 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
                 {"dependent": c.dependent, "description": c.description} for c in constraints
             ],
             "mass_matrix_solve": "symbolic LDL^T in f (structural zeros kept)",
+            **header_extra,
         },
     )
+
+
+def _steady(steady: SteadyMotion, states):
+    """The state at unit speed (function `steady` of the IR) and the header entry naming it."""
+    names = [s.name for s in states]
+    unknown = [n for n in (steady.speed_state, *steady.modes) if n not in names]
+    if unknown:
+        raise ModelError(f"steady motion: {', '.join(unknown)} not states ({', '.join(names)})")
+    unit = [ca.SX(0)] * len(names)
+    unit[names.index(steady.speed_state)] = ca.SX(steady.per_unit_speed)
+    expr = ca.vertcat(*unit)  # a function of the parameters only
+    header = {"steady_motion": {"speed_state": steady.speed_state, "modes": list(steady.modes)}}
+    return expr, header
 
 
 def _hamel(bodies, speed_of, p_vec, q_vec, V, gamma):

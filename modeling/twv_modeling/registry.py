@@ -6,8 +6,9 @@ from pathlib import Path
 
 from .derived import DerivedModel
 from .explicit import load_model_file
-from .models import EXPLICIT, EXPLICIT_DIR, SHIPPED, VEHICLES
+from .models import EXPLICIT, EXPLICIT_DIR, OTHER_MULTIBODY, SHIPPED, VEHICLES
 from .models import vehicles as vehicle_models
+from .models import whipple as whipple_model
 from .multibody import derive
 from .params import Param, load_values
 
@@ -25,6 +26,11 @@ def build(name: str) -> DerivedModel:
         P, p_vec = vehicle_models.symbols()
         model = derive(vehicle_models.BUILDERS[name](P), P, p_vec)
         source = vehicle_models.PARAMS_SOURCE[name]
+        return with_defaults_from(model, VEHICLES_DIR / source, f"vehicles/{source}")
+    if name in OTHER_MULTIBODY:
+        P, p_vec = whipple_model.symbols()
+        model = derive(whipple_model.whipple(P), P, p_vec)
+        source = OTHER_MULTIBODY[name]
         return with_defaults_from(model, VEHICLES_DIR / source, f"vehicles/{source}")
     if name in EXPLICIT:
         return load_model_file(EXPLICIT_DIR / f"{name}.py")

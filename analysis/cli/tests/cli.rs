@@ -418,3 +418,49 @@ fn audit_of_a_users_hand_file() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `twv linear --model whipple --speed LO:HI:STEP --out DIR`: the bicycle's eigenvalues against
+/// speed as CSV, figure and JSON; exit 3 when the grid holds no self-stable speed.
+#[test]
+fn linear_speed_sweep_of_the_bicycle() {
+    let dir = scratch("speed");
+    let out = twv(&[
+        "linear",
+        "--model",
+        "whipple",
+        "--speed",
+        "0:10:0.01",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    assert!(
+        stdout.contains("self-stable from 4.29238253634"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("to 6.02426201538"), "{stdout}");
+    let csv = std::fs::read_to_string(dir.join("eigenvalues.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 1001);
+    assert!(csv.starts_with("speed,re1,im1,re2,im2,re3,im3,re4,im4\n"));
+    for name in ["eigenvalues.svg", "eigenvalues.png", "steady.json"] {
+        assert!(dir.join(name).exists(), "{name}");
+    }
+    negative_with(
+        &twv(&["linear", "--model", "whipple", "--speed", "0:3:0.1"]),
+        &["whipple is nowhere self-stable on the grid"],
+    );
+    fails_with(
+        &twv(&["linear", "--model", "whipple", "--speed", "0:10"]),
+        &["--speed 0:10: expected LO:HI:STEP"],
+    );
+    fails_with(
+        &twv(&["linear", "--model", "whipple", "--speed", "5:1:0.1"]),
+        &["--speed", "needs finite LO < HI"],
+    );
+    fails_with(
+        &twv(&["linear", "--model", "vehicle8", "--speed", "0:1:0.5"]),
+        &["vehicle8", "no steady motion"],
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

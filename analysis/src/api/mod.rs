@@ -25,6 +25,7 @@ mod linear;
 mod phase;
 mod simulate;
 mod spectrum;
+mod steady;
 mod sweep;
 mod tune;
 
@@ -44,6 +45,9 @@ pub use simulate::{
     RECOVERED_PHI,
 };
 pub use spectrum::{drift_states, spectrum, SpectrumResult, SpectrumSettings, Timing};
+pub use steady::{
+    steady_motion, SpeedPoint, SteadyResult, SteadySettings, SteadyVerdict, MAX_SPEEDS,
+};
 pub use sweep::{
     compute_points, run_shard, status_counts, sweep, Computed, ShardOptions, ShardOutcome,
     SweepSettings, MAX_POINTS,

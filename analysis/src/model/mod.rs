@@ -102,7 +102,11 @@ pub fn vehicle_defaults(model: &str, paper: &str, segway: &str) -> Option<ParamS
 
 /// The names of the shipped models.
 pub fn shipped_models() -> Vec<&'static str> {
-    twv_generated::MODELS.iter().map(|(n, _)| *n).collect()
+    twv_generated::MODELS
+        .iter()
+        .chain(&twv_generated::INTERPRETED)
+        .map(|(n, _)| *n)
+        .collect()
 }
 
 impl ModelSpec {
@@ -124,15 +128,25 @@ impl ModelSpec {
     pub fn resolve(&self) -> Result<ResolvedModel> {
         let (engine, origin, ir) = match &self.model {
             ModelSource::Shipped(name) => {
-                let Some(text) = twv_generated::ir_json(name) else {
-                    return Err(Error::UnknownModel {
-                        name: name.clone(),
-                        known: shipped_models().join(", "),
-                    });
-                };
                 let file = format!("generated/ir/{name}.json");
-                let ir = twv_ir::parse_ir(text, &file)?;
-                (Engine::Generated(name.clone()), file, ir)
+                let interpreted = twv_generated::INTERPRETED.iter().find(|(n, _)| n == name);
+                match (twv_generated::ir_json(name), interpreted) {
+                    (Some(text), _) => {
+                        let ir = twv_ir::parse_ir(text, &file)?;
+                        (Engine::Generated(name.clone()), file, ir)
+                    }
+                    (None, Some((_, text))) => (
+                        Engine::Interpreted,
+                        file.clone(),
+                        twv_ir::parse_ir(text, &file)?,
+                    ),
+                    (None, None) => {
+                        return Err(Error::UnknownModel {
+                            name: name.clone(),
+                            known: shipped_models().join(", "),
+                        })
+                    }
+                }
             }
             ModelSource::IrFile(path) => (
                 Engine::Interpreted,

@@ -28,7 +28,8 @@ pub use interp::{visit_interpreted, Interpreted, UnsupportedSize, VisitError, MA
 pub use ops::{BinaryOp, UnaryOp};
 pub use params::{check_values, load_params, parse_params};
 pub use types::{
-    Arg, Function, Golden, Instr, Ir, Kind, Mechanics, Output, Param, ParamKind, Signal, FORMAT,
+    Arg, Function, Golden, Instr, Ir, Kind, Mechanics, Output, Param, ParamKind, Signal,
+    SteadyMotion, FORMAT,
 };
 pub use validate::{load_ir, parse_ir, MECHANICAL_FUNCTIONS, REQUIRED_FUNCTIONS};
 

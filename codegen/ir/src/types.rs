@@ -98,6 +98,17 @@ pub struct Mechanics {
     pub constraints: Vec<serde_json::Value>,
     #[serde(default)]
     pub mass_matrix_solve: String,
+    /// Straight running at a speed, for linearisations against speed (the bicycle), if the
+    /// model describes it; the IR's function `steady` is then the state at unit speed.
+    #[serde(default)]
+    pub steady_motion: Option<SteadyMotion>,
+}
+
+/// `mechanics.steady_motion`: which state carries the speed, and the modes studied about it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SteadyMotion {
+    pub speed_state: String,
+    pub modes: Vec<String>,
 }
 
 /// Reference values computed by CasADi (every parameter at its default).

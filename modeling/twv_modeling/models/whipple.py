@@ -19,7 +19,7 @@ import casadi as ca
 
 from ..derived import Signal
 from ..kinematics import Body, PlanarJoint, RevoluteJoint
-from ..multibody import MultibodySystem, RollingContact, TorqueInput
+from ..multibody import MultibodySystem, RollingContact, SteadyMotion, TorqueInput
 from ..params import Param
 
 _KINDS = {"m_": "mass", "r_": "length", "x_": "length", "z_": "length"}
@@ -136,4 +136,6 @@ def whipple(P) -> MultibodySystem:
             RollingContact("FW", r_f, description="front wheel"),
         ),
         contact_speeds=("v_x", "v_y", "w_psi", "w_theta", "w_F"),
+        # Upright straight running: only the rear wheel turns, at v / r_R.
+        steady_motion=SteadyMotion("w_R", 1 / r_r, ("phi", "delta", "w_phi", "w_delta")),
     )

@@ -18,5 +18,6 @@ mod lyapunov;
 mod lyapunov_parts;
 mod output;
 mod report;
+mod steady;
 mod sweep;
 mod sweep_lanes;

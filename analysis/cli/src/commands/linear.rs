@@ -1,12 +1,18 @@
 //! `twv linear`: A, B from the generated Jacobians, the modes, the pitch loop's closed-loop
 //! poles and — only for a stable loop — its margins, and an LQR design for comparison.
 
-use anyhow::Result;
+use std::path::PathBuf;
+
+use anyhow::{bail, Result};
 use clap::Args;
-use twv_analysis::api::{analyse, At, LinearSettings, LoopVerdict};
+use twv_analysis::api::{
+    analyse, steady_motion, At, LinearSettings, LoopVerdict, SteadySettings, SteadyVerdict,
+};
 use twv_analysis::linear::LoopOptions;
 
-use crate::common::{parse_gains, parse_vector, print_result, Context, ModelArgs, Outcome};
+use crate::common::{
+    parse_gains, parse_vector, print_result, write_files, Context, ModelArgs, Outcome,
+};
 
 /// What sits between the controller and the vehicle (shared by `linear` and `tune`).
 #[derive(Args, Debug, Clone)]
@@ -63,12 +69,58 @@ pub struct LinearArgs {
     /// LQR input weight [1/N²]
     #[arg(long, value_name = "R", default_value_t = 1e-4)]
     pub lqr_r: f64,
+    /// Instead: the eigenvalues of the steady motion's modes against speed, LO:HI:STEP [m/s]
+    /// (models whose IR describes straight running, e.g. whipple); exit status 3 when it is
+    /// nowhere self-stable
+    #[arg(long, value_name = "LO:HI:STEP")]
+    pub speed: Option<String>,
+    /// With --speed: write eigenvalues.csv, eigenvalues.svg/.png and steady.json here
+    #[arg(long, value_name = "DIR", requires = "speed")]
+    pub out: Option<PathBuf>,
     /// Print JSON instead of the summary
     #[arg(long)]
     pub json: bool,
 }
 
+/// `LO:HI:STEP` into the sweep's settings.
+fn speed_grid(text: &str) -> Result<SteadySettings> {
+    let parts: Vec<&str> = text.split(':').collect();
+    let [lo, hi, step] = parts[..] else {
+        bail!("--speed {text}: expected LO:HI:STEP, e.g. 0:10:0.01");
+    };
+    let number = |what: &str, s: &str| -> Result<f64> {
+        s.trim()
+            .parse::<f64>()
+            .map_err(|_| anyhow::anyhow!("--speed {text}: {what} `{s}` is not a number"))
+    };
+    Ok(SteadySettings {
+        lo: number("LO", lo)?,
+        hi: number("HI", hi)?,
+        step: number("STEP", step)?,
+        ..SteadySettings::default()
+    })
+}
+
+fn run_speed(args: &LinearArgs, grid: &str, ctx: &Context) -> Result<Outcome> {
+    let model = args.model.resolve(ctx)?;
+    let result = steady_motion(&model, &speed_grid(grid)?)?;
+    if let Some(dir) = &args.out {
+        write_files(ctx, dir, &result.files()?)?;
+    }
+    print_result(&result, args.json, || result.summary())?;
+    Ok(match result.verdict {
+        SteadyVerdict::SelfStable => Outcome::Done,
+        SteadyVerdict::NowhereStable => Outcome::Negative(format!(
+            "{} is nowhere self-stable on the grid",
+            result.model
+        )),
+    })
+}
+
 pub fn run(args: &LinearArgs, ctx: &Context) -> Result<Outcome> {
+    if let Some(grid) = &args.speed {
+        return run_speed(args, grid, ctx);
+    }
     let model = args.model.resolve(ctx)?;
     let at = match args.at.as_str() {
         "upright" => At::Upright,
