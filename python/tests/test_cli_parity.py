@@ -159,6 +159,15 @@ def test_audit_of_a_hand_file(tmp_path):
         twv.audit(model, hand=bad, hand_text=text)
 
 
+def test_the_bicycles_speed_sweep():
+    cli = cli_json("linear", "--model", "whipple", "--speed", "0:10:0.5")
+    py = twv.steady_motion(twv.Model("whipple"), (0, 10, 0.5))
+    assert py.raw == cli
+    assert py.raw["verdict"] == "self_stable"
+    [(weave, capsize)] = py.raw["stable_ranges"]
+    assert abs(weave - 4.29238253634111) <= 1e-10 and abs(capsize - 6.02426201538837) <= 1e-10
+
+
 def test_sweep_equals_the_shard_file(vehicle8, tmp_path):
     import subprocess
 

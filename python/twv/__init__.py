@@ -6,6 +6,7 @@
     r = twv.disturb(m, "forward", 0.1)
     g = twv.tune(m, "dpm>=60")
     mp = twv.sweep(m, kp=(0, 8000, 50), kd=(0, 4000, 50))
+    bike = twv.steady_motion(twv.Model("whipple"), (0, 10, 0.01))   # weave/capsize speeds
 
 The derivation (CasADi) is `twv.modeling`; `twv.derive` turns a description into a Model. The
 numerics run in Rust (twv._native); results equal the CLI's JSON for the same inputs. Units are
@@ -22,6 +23,7 @@ from ._jobs import (
     margins,
     report,
     simulate,
+    steady_motion,
     sweep,
     tune,
 )
@@ -56,6 +58,7 @@ __all__ = [
     "report",
     "shipped_models",
     "simulate",
+    "steady_motion",
     "sweep",
     "tune",
 ]

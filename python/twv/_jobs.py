@@ -258,6 +258,15 @@ def audit(
     return Result(json.loads(raw))
 
 
+def steady_motion(model: Model, speeds=(0.0, 10.0, 0.01)):
+    """The eigenvalues of the lean and steer about straight running against speed (models whose
+    IR describes a steady motion: "whipple"), `speeds` = (lo, hi, step) in m/s; `raw` holds
+    `points` (speed, eigenvalues, spectral_abscissa), `stable_ranges` and the `verdict`."""
+    lo, hi, step = speeds
+    raw, _ = _run("steady", model, {"lo": float(lo), "hi": float(hi), "step": float(step)})
+    return Result(json.loads(raw))
+
+
 def _axis(name: str, value) -> dict[str, Any] | None:
     if value is None:
         return None

@@ -9,8 +9,9 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 
 use super::{
-    analyse, audit_model, compute_points, simulate, spectrum, tune_model, HandAuditJob,
-    LinearSettings, SimSettings, SpectrumSettings, SweepSettings, TuneSettings,
+    analyse, audit_model, compute_points, simulate, spectrum, steady_motion, tune_model,
+    HandAuditJob, LinearSettings, SimSettings, SpectrumSettings, SteadySettings, SweepSettings,
+    TuneSettings,
 };
 use crate::audit::AuditSettings;
 use crate::error::{Error, Result};
@@ -18,7 +19,7 @@ use crate::model::ResolvedModel;
 use crate::progress::Progress;
 
 /// The jobs [`run`] knows, by name.
-pub const JOBS: [&str; 7] = [
+pub const JOBS: [&str; 8] = [
     "spectrum",
     "simulate",
     "linear",
@@ -26,6 +27,7 @@ pub const JOBS: [&str; 7] = [
     "sweep",
     "audit",
     "audit_hand",
+    "steady",
 ];
 
 /// Reads the settings of `job` from a JSON object (the error names the job and the field).
@@ -55,6 +57,7 @@ pub fn default_settings(job: &str) -> Result<String> {
         "linear" => to_text(&LinearSettings::default()),
         "tune" => to_text(&TuneSettings::default()),
         "audit" => to_text(&AuditSettings::default()),
+        "steady" => to_text(&SteadySettings::default()),
         "sweep" => Err(Error::input(
             "settings",
             "sweep: no default; give at least `grid` and `metric`",
@@ -107,6 +110,13 @@ pub fn run(
         "audit_hand" => {
             let job: HandAuditJob = settings(job, settings_json)?;
             to_text(&job.run(model)?).map(plain)
+        }
+        "steady" => {
+            let r = steady_motion(model, &settings(job, settings_json)?)?;
+            Ok(Output {
+                result: to_text(&r)?,
+                csv: Some(r.csv()),
+            })
         }
         "sweep" => {
             let s: SweepSettings = settings(job, settings_json)?;
