@@ -50,7 +50,8 @@ step "cargo test --doc"
 cargo test --workspace --doc --profile dev
 
 step "python package: build the extension into .venv (maturin), pytest python/tests"
-VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --quiet -m python/Cargo.toml
+# --uv: the .venv's pinned uv installs the extension (pip resolving its dependencies took ~20 s).
+PATH="$PWD/.venv/bin:$PATH" VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --uv --quiet -m python/Cargo.toml
 TWV_BIN="$PWD/target/debug/twv" "$py" -m pytest -q -p no:cacheprovider python/tests
 
 step "done"
