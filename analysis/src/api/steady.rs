@@ -335,17 +335,53 @@ impl SteadyResult {
         out
     }
 
-    /// The classic plot: real parts (solid) and the largest imaginary part against speed.
+    /// The eigenvalues followed by continuity from speed to speed (each new eigenvalue joins
+    /// the nearest unclaimed branch), so that a mode keeps its curve where real parts cross.
+    pub fn branches(&self) -> Vec<Vec<(f64, f64)>> {
+        let Some(first) = self.points.first() else {
+            return Vec::new();
+        };
+        let mut branches: Vec<Vec<(f64, f64)>> =
+            first.eigenvalues.iter().map(|e| vec![*e]).collect();
+        for p in &self.points[1..] {
+            let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+            for (b, branch) in branches.iter().enumerate() {
+                let last = branch[branch.len() - 1];
+                for (e, ev) in p.eigenvalues.iter().enumerate() {
+                    pairs.push((((ev.0 - last.0).powi(2) + (ev.1 - last.1).powi(2)), b, e));
+                }
+            }
+            pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (mut taken_b, mut taken_e) = (
+                vec![false; branches.len()],
+                vec![false; p.eigenvalues.len()],
+            );
+            let mut next = vec![None; branches.len()];
+            for (_, b, e) in pairs {
+                if !taken_b[b] && !taken_e[e] {
+                    taken_b[b] = true;
+                    taken_e[e] = true;
+                    next[b] = Some(p.eigenvalues[e]);
+                }
+            }
+            for (branch, value) in branches.iter_mut().zip(next) {
+                branch.push(value.unwrap_or((f64::NAN, f64::NAN)));
+            }
+        }
+        branches
+    }
+
+    /// The classic plot: the real part of each eigenvalue branch and the largest imaginary
+    /// part against speed.
     pub fn figure(&self) -> Figure {
-        let k = self.points.first().map_or(0, |p| p.eigenvalues.len());
-        let mut curves: Vec<Curve> = (0..k)
-            .map(|i| Curve {
+        let speeds: Vec<f64> = self.points.iter().map(|p| p.speed).collect();
+        let mut curves: Vec<Curve> = self
+            .branches()
+            .iter()
+            .enumerate()
+            .map(|(i, branch)| Curve {
                 name: format!("Re λ{}", i + 1),
-                points: self
-                    .points
-                    .iter()
-                    .map(|p| (p.speed, p.eigenvalues[i].0))
-                    .collect(),
+                points: speeds.iter().zip(branch).map(|(v, e)| (*v, e.0)).collect(),
             })
             .collect();
         curves.push(Curve {
