@@ -127,7 +127,13 @@ fn the_figure_follows_each_mode_through_the_crossings() {
     let result = steady_motion(&model, &SteadySettings::default()).unwrap();
     let branches = result.branches();
     assert_eq!(branches.len(), 4);
-    let at = |v: f64| result.points.iter().position(|p| (p.speed - v).abs() < 1e-9).unwrap();
+    let at = |v: f64| {
+        result
+            .points
+            .iter()
+            .position(|p| (p.speed - v).abs() < 1e-9)
+            .unwrap()
+    };
     let (three, ten) = (at(3.0), at(10.0));
     // The capsize mode: -2.6337 at 3 m/s (Table 2) and +0.1611 at 10 m/s, one branch, although
     // its real part crosses the weave's near 4.7 m/s (sorting by real part would switch curves).
@@ -135,6 +141,10 @@ fn the_figure_follows_each_mode_through_the_crossings() {
         .iter()
         .find(|b| (b[three].0 + 2.63366137253667).abs() < 1e-9)
         .expect("the capsize branch");
-    assert!((capsize[ten].0 - 0.16105338653172).abs() < 1e-9, "{:?}", capsize[ten]);
+    assert!(
+        (capsize[ten].0 - 0.16105338653172).abs() < 1e-9,
+        "{:?}",
+        capsize[ten]
+    );
     assert!(capsize[ten].1 == 0.0);
 }
