@@ -178,7 +178,6 @@ pub fn audit_hand(
     hand: &HandSource,
     settings: &HandAuditSettings,
 ) -> Result<HandAuditReport> {
-    settings.validate()?;
     let (text, origin) = hand.read()?;
     let hand = read_hand_file(&text, &origin, &model.ir)?;
     audit_hand_model(&model.ir, &model.params, &hand, settings)

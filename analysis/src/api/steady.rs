@@ -214,11 +214,15 @@ impl<'a> Motion<'a> {
     }
 
     fn abscissa(&self, v: f64, work: &mut Vec<f64>) -> Result<f64> {
-        Ok(self
-            .eigenvalues(v, work)?
-            .iter()
-            .fold(f64::NEG_INFINITY, |m, e| m.max(e.0)))
+        Ok(spectral_abscissa(&self.eigenvalues(v, work)?))
     }
+}
+
+/// The largest real part (< 0: every studied mode decays).
+fn spectral_abscissa(eigenvalues: &[(f64, f64)]) -> f64 {
+    eigenvalues
+        .iter()
+        .fold(f64::NEG_INFINITY, |m, e| m.max(e.0))
 }
 
 /// The speed in [a, b] where the spectral abscissa changes sign (it does at the ends), by
@@ -255,13 +259,10 @@ pub fn steady_motion(model: &ResolvedModel, settings: &SteadySettings) -> Result
         .into_iter()
         .map(|v| {
             let eigenvalues = motion.eigenvalues(v, &mut work)?;
-            let spectral_abscissa = eigenvalues
-                .iter()
-                .fold(f64::NEG_INFINITY, |m, e| m.max(e.0));
             Ok(SpeedPoint {
                 speed: v,
+                spectral_abscissa: spectral_abscissa(&eigenvalues),
                 eigenvalues,
-                spectral_abscissa,
             })
         })
         .collect::<Result<Vec<_>>>()?;

@@ -240,8 +240,9 @@ impl Source<'_> {
     }
 }
 
-fn names(signals: impl Iterator<Item = String>) -> Vec<String> {
-    signals.collect()
+/// The model's state names.
+fn state_names(ir: &Ir) -> Vec<String> {
+    ir.states().iter().map(|s| s.name.clone()).collect()
 }
 
 /// The names formulas may use, and the model's state, input and parameter names.
@@ -313,7 +314,7 @@ fn mechanical_names(
         ),
     };
     let mech = ir.mechanics().ok_or_else(not_mechanical)?;
-    let states = names(ir.states().iter().map(|s| s.name.clone()));
+    let states = state_names(ir);
     let (coords, speeds) = (mech.coordinates.clone(), mech.speeds.clone());
     let in_order = coords.iter().chain(&speeds).eq(states.iter());
     if !in_order {
@@ -383,7 +384,7 @@ pub fn read_hand_file(text: &str, origin: &str, ir: &Ir) -> Result<HandModel, Ha
             ))
         }
         (Some(f), false) => {
-            let states = names(ir.states().iter().map(|s| s.name.clone()));
+            let states = state_names(ir);
             HandForm::Explicit {
                 f: src.vector("f", f, &states, &scope)?,
             }

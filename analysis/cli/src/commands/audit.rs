@@ -103,20 +103,18 @@ fn run_hand(args: &AuditArgs, hand: &std::path::Path, ctx: &Context) -> Result<O
         param_spread: args.param_spread,
         ..HandAuditSettings::default()
     };
-    let source = HandSource::File(hand.to_path_buf());
+    // Read once: the file names its model and is then audited from the same text.
+    let (text, origin) = HandSource::File(hand.to_path_buf()).read()?;
     let model = match (&args.model, &args.ir) {
         (Some(name), _) => Some(name.clone()),
         (None, Some(_)) => None,
-        (None, None) => {
-            let (text, origin) = source.read()?;
-            match model_named_in(&text, &origin)? {
-                Some(name) => Some(name),
-                None => bail!(
-                    "{}: says no `model = \"…\"`; name the model with --model or --ir",
-                    hand.display()
-                ),
-            }
-        }
+        (None, None) => match model_named_in(&text, &origin)? {
+            Some(name) => Some(name),
+            None => bail!(
+                "{}: says no `model = \"…\"`; name the model with --model or --ir",
+                hand.display()
+            ),
+        },
     };
     let model = ModelArgs {
         model,
@@ -124,7 +122,7 @@ fn run_hand(args: &AuditArgs, hand: &std::path::Path, ctx: &Context) -> Result<O
         params: args.params.clone(),
     }
     .resolve(ctx)?;
-    let report = audit_hand(&model, &source, &settings)?;
+    let report = audit_hand(&model, &HandSource::Text { text, origin }, &settings)?;
     print_result(&report, args.json, || report.table())?;
     Ok(if report.passed {
         Outcome::Done
