@@ -22,11 +22,15 @@ step "ruff"
 .venv/bin/ruff check modeling analysis/benches python
 .venv/bin/ruff format --check modeling analysis/benches python
 
-step "pytest modeling/"
-"$py" -m pytest -q modeling/tests
-
-step "IR freshness (generated/ir is what the modeling code derives today)"
-"$py" -m twv_modeling check
+# The modeling tests (sympy's Kane routes take ~20 s) run beside the Rust build, which leaves a
+# core idle while it compiles the analysis crate's front end; their log is printed after it.
+step "pytest modeling/ and the IR freshness check (in the background, beside the Rust build)"
+mkdir -p target
+modeling_log=target/pytest-modeling.log
+( "$py" -m pytest -q -p no:cacheprovider modeling/tests \
+    && echo "IR freshness (generated/ir is what the modeling code derives today):" \
+    && "$py" -m twv_modeling check ) >"$modeling_log" 2>&1 &
+modeling_pid=$!
 
 step "cargo fmt --check"
 cargo fmt --all --check
@@ -42,6 +46,15 @@ export TWV_CLIPPY_DRIVER
 export RUSTC_WORKSPACE_WRAPPER="$PWD/.ci/clippy-rustc"
 cargo test --workspace --no-run --profile dev
 cargo build --workspace --benches --profile dev
+
+step "pytest modeling/ and the IR freshness check (their log)"
+modeling_status=0
+wait "$modeling_pid" || modeling_status=$?
+cat "$modeling_log"
+if [ "$modeling_status" -ne 0 ]; then
+    echo "pytest modeling/ or the IR freshness check failed (exit $modeling_status)"
+    exit "$modeling_status"
+fi
 
 step "cargo nextest (every test binary, in parallel)"
 cargo nextest run --workspace --cargo-profile dev --no-fail-fast

@@ -197,3 +197,16 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     }
     result.map_err(io)
 }
+
+/// A table as CSV: the header, then one row per line, every number in full precision (`{:e}`,
+/// which round-trips).
+pub fn csv_table(columns: &[String], rows: &[Vec<f64>]) -> String {
+    let mut s = columns.join(",");
+    s.push('\n');
+    for r in rows {
+        let cells: Vec<String> = r.iter().map(|v| format!("{v:e}")).collect();
+        s += &cells.join(",");
+        s.push('\n');
+    }
+    s
+}

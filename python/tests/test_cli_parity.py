@@ -193,3 +193,16 @@ def test_sweep_equals_the_shard_file(vehicle8, tmp_path):
     assert py.value.shape == (1, 5, 6)
     # Statuses: a fall below the critical Kp, an exponent above it.
     assert (py.status[0, :, 0] == "fell").all()
+
+
+def test_the_uncontrolled_bicycle_rides():
+    args = ("--model", "whipple", "--perturb", "w_phi=0.05", "--t-end", "6")
+    for speed, verdict in ((5.0, "recovered"), (3.0, "fell")):
+        cli = cli_json("ride", *args, "--speed", str(speed), "--fall-angle", "0.5")
+        py = twv.ride(
+            twv.Model("whipple"), speed=speed, perturb={"w_phi": 0.05}, t_end=6.0, fall_angle=0.5
+        )
+        assert py.raw == cli
+        assert py.verdict == verdict
+        assert py.columns[:5] == ["t", "psi", "x", "y", "phi"]
+        assert py.series["w_R"][0] == speed / 0.3

@@ -7,6 +7,7 @@
     g = twv.tune(m, "dpm>=60")
     mp = twv.sweep(m, kp=(0, 8000, 50), kd=(0, 4000, 50))
     bike = twv.steady_motion(twv.Model("whipple"), (0, 10, 0.01))   # weave/capsize speeds
+    free = twv.ride(twv.Model("whipple"), speed=5.0, perturb={"w_phi": 0.05})  # nobody steers
 
 The derivation (CasADi) is `twv.modeling`; `twv.derive` turns a description into a Model. The
 numerics run in Rust (twv._native); results equal the CLI's JSON for the same inputs. Units are
@@ -22,6 +23,7 @@ from ._jobs import (
     lyapunov_spectrum,
     margins,
     report,
+    ride,
     simulate,
     steady_motion,
     sweep,
@@ -29,7 +31,15 @@ from ._jobs import (
 )
 from ._model import Model, derive
 from ._native import InputError, ModelError, NumericalError, TwvError, shipped_models
-from ._results import LinearResult, Result, SimResult, SpectrumResult, SweepResult, TuneResult
+from ._results import (
+    LinearResult,
+    Result,
+    RideResult,
+    SimResult,
+    SpectrumResult,
+    SweepResult,
+    TuneResult,
+)
 from ._settings import integrator, pid
 
 __all__ = [
@@ -39,6 +49,7 @@ __all__ = [
     "ModelError",
     "NumericalError",
     "Result",
+    "RideResult",
     "SimResult",
     "SpectrumResult",
     "SweepResult",
@@ -56,6 +67,7 @@ __all__ = [
     "modeling",
     "pid",
     "report",
+    "ride",
     "shipped_models",
     "simulate",
     "steady_motion",

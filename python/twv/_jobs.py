@@ -14,7 +14,15 @@ from . import _native
 from ._arrays import vector
 from ._model import Model
 from ._native import InputError
-from ._results import LinearResult, Result, SimResult, SpectrumResult, SweepResult, TuneResult
+from ._results import (
+    LinearResult,
+    Result,
+    RideResult,
+    SimResult,
+    SpectrumResult,
+    SweepResult,
+    TuneResult,
+)
 from ._settings import integrator, pid, run_settings
 
 
@@ -127,6 +135,38 @@ def simulate(
     }
     raw, csv = _run("simulate", model, settings)
     return SimResult(json.loads(raw), csv)
+
+
+def ride(
+    model: Model,
+    x0=None,
+    *,
+    speed: float | None = None,
+    perturb: dict[str, float] | None = None,
+    u=None,
+    watch: str = "phi",
+    t_end: float = 10.0,
+    sample: float = 0.01,
+    integrator_kind: str = "rk4",
+    h: float | None = None,
+    rtol: float | None = None,
+    atol: float | None = None,
+    fall_angle: float | None = math.pi / 2,
+) -> RideResult:
+    """An uncontrolled run under constant inputs `u` from x0, or from the model's steady motion
+    at `speed` [m/s] (the bicycle's straight running), plus `perturb` ({state: push}); the run
+    stops when |watch| passes fall_angle. `verdict`: recovered (the watched state's last 10 %
+    within a tenth of its peak), not_recovered, fell or undisturbed."""
+    settings = {
+        "x0": None if x0 is None else vector("x0", x0),
+        "speed": None if speed is None else float(speed),
+        "perturb": {str(k): float(v) for k, v in (perturb or {}).items()},
+        "u": None if u is None else vector("u", u),
+        "watch": watch,
+        "run": run_settings(t_end, sample, integrator_kind, h, rtol, atol, fall_angle),
+    }
+    raw, csv = _run("ride", model, settings)
+    return RideResult(json.loads(raw), csv)
 
 
 def disturb(

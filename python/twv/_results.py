@@ -78,6 +78,21 @@ class SimResult(Result):
         return self.raw["recovery"] == "recovered"
 
 
+class RideResult(Result):
+    """An uncontrolled run: the time series (`series[name]`, `t`), how it ended and the
+    verdict on the watched state."""
+
+    def __init__(self, raw: dict[str, Any], csv: str | None):
+        super().__init__(raw)
+        self.columns, self.data = _csv(csv)
+        self.series = {c: self.data[:, i] for i, c in enumerate(self.columns)}
+        self.t = self.series.get("t", np.zeros(0))
+
+    @property
+    def verdict(self) -> str:
+        return self.raw["verdict"]
+
+
 class LinearResult(Result):
     """The linearisation: open-loop modes, the PID pitch loop (poles, margins) and the LQR."""
 

@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 use crate::commands::{
     audit::AuditArgs, codegen::CodegenArgs, disturb::DisturbArgs, eval::EvalArgs,
     linear::LinearArgs, lyap::LyapArgs, merge::MergeArgs, phase::PhaseArgs, report::ReportArgs,
-    sim::SimArgs, sweep::SweepArgs, tune::TuneArgs,
+    ride::RideArgs, sim::SimArgs, sweep::SweepArgs, tune::TuneArgs,
 };
 
 /// twv: two-wheeled self-balancing vehicle dynamics — generated equations of motion, audit,
@@ -39,6 +39,9 @@ pub enum Command {
     /// Closed-loop run of the PID pitch controller (tilt recovery or a maneuver): CSV, figures,
     /// metrics
     Sim(SimArgs),
+    /// Uncontrolled run under constant inputs, from a state or a steady motion at a speed (the
+    /// bicycle nobody steers): CSV, figures, whether the push died out
+    Ride(RideArgs),
     /// Recovery from a forward or backward tilt under the study's PD (its Figs. 5 and 6)
     Disturb(DisturbArgs),
     /// Phase portraits (Φ, dΦ/dt) for several gain sets side by side (the study's Fig. 4), or

@@ -464,3 +464,78 @@ fn linear_speed_sweep_of_the_bicycle() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `twv ride`: the uncontrolled bicycle from its straight running at a speed with a push in
+/// lean rate — recovers inside the self-stable range (files written, JSON equal to the
+/// library's job), falls below it; bad pushes named; a model with no pitch points `twv sim`
+/// users to it.
+#[test]
+fn ride_of_the_uncontrolled_bicycle() {
+    let dir = scratch("ride");
+    let out = twv(&[
+        "ride",
+        "--model",
+        "whipple",
+        "--speed",
+        "5",
+        "--perturb",
+        "w_phi=0.05",
+        "--t-end",
+        "6",
+        "--out",
+        dir.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["verdict"], "recovered");
+    assert!(v["tail_peak"].as_f64().unwrap() <= 0.1 * v["peak"].as_f64().unwrap());
+    for f in ["ride.csv", "ride.json", "phi.svg", "phi.png", "delta.svg"] {
+        assert!(dir.join(f).is_file(), "{f}");
+    }
+    let csv = std::fs::read_to_string(dir.join("ride.csv")).unwrap();
+    assert!(csv.starts_with("t,psi,x,y,phi,theta,delta,w_phi,w_R,w_delta\n"));
+    assert_eq!(csv.lines().count(), 602);
+
+    let slow = twv(&[
+        "ride",
+        "--model",
+        "whipple",
+        "--speed",
+        "3",
+        "--perturb",
+        "w_phi=0.05",
+        "--t-end",
+        "6",
+        "--fall-angle",
+        "0.5",
+    ]);
+    assert!(slow.status.success());
+    let text = String::from_utf8_lossy(&slow.stdout);
+    assert!(text.contains("FELL: |phi| passed 0.5"), "{text}");
+
+    fails_with(
+        &twv(&[
+            "ride",
+            "--model",
+            "whipple",
+            "--speed",
+            "5",
+            "--perturb",
+            "lean=1",
+        ]),
+        &["perturb", "`lean` is not a state of whipple"],
+    );
+    fails_with(
+        &twv(&["ride", "--model", "whipple", "--perturb", "w_phi"]),
+        &["--perturb: `w_phi` is not NAME=VALUE"],
+    );
+    fails_with(
+        &twv(&["sim", "--model", "whipple"]),
+        &["no pitch to control", "twv ride"],
+    );
+}

@@ -9,9 +9,9 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 
 use super::{
-    analyse, audit_model, compute_points, simulate, spectrum, steady_motion, tune_model,
-    HandAuditJob, LinearSettings, SimSettings, SpectrumSettings, SteadySettings, SweepSettings,
-    TuneSettings,
+    analyse, audit_model, compute_points, ride, simulate, spectrum, steady_motion, tune_model,
+    HandAuditJob, LinearSettings, RideSettings, SimSettings, SpectrumSettings, SteadySettings,
+    SweepSettings, TuneSettings,
 };
 use crate::audit::AuditSettings;
 use crate::error::{Error, Result};
@@ -19,9 +19,10 @@ use crate::model::ResolvedModel;
 use crate::progress::Progress;
 
 /// The jobs [`run`] knows, by name.
-pub const JOBS: [&str; 8] = [
+pub const JOBS: [&str; 9] = [
     "spectrum",
     "simulate",
+    "ride",
     "linear",
     "tune",
     "sweep",
@@ -54,6 +55,7 @@ pub fn default_settings(job: &str) -> Result<String> {
     match job {
         "spectrum" => to_text(&SpectrumSettings::default()),
         "simulate" => to_text(&SimSettings::default()),
+        "ride" => to_text(&RideSettings::default()),
         "linear" => to_text(&LinearSettings::default()),
         "tune" => to_text(&TuneSettings::default()),
         "audit" => to_text(&AuditSettings::default()),
@@ -99,6 +101,13 @@ pub fn run(
         }
         "simulate" => {
             let r = simulate(model, &settings(job, settings_json)?, progress)?;
+            Ok(Output {
+                result: to_text(&r)?,
+                csv: Some(r.csv()),
+            })
+        }
+        "ride" => {
+            let r = ride(model, &settings(job, settings_json)?, progress)?;
             Ok(Output {
                 result: to_text(&r)?,
                 csv: Some(r.csv()),

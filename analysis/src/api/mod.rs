@@ -10,6 +10,7 @@
 //! | audit | [`crate::audit::AuditSettings`] | [`audit_model`] | [`crate::audit::AuditReport`] |
 //! | lyap | [`SpectrumSettings`] | [`spectrum()`] | [`SpectrumResult`] |
 //! | sim, disturb | [`SimSettings`] | [`simulate()`] | [`SimResult`] |
+//! | ride | [`RideSettings`] | [`ride()`] | [`RideResult`] |
 //! | phase | [`PhaseSettings`] | [`portraits`] | [`PhaseResult`] |
 //! | linear | [`LinearSettings`] | [`analyse`] | [`LinearReport`] |
 //! | tune | [`TuneSettings`] | [`tune_model`] | [`TuneReport`] |
@@ -23,6 +24,7 @@ mod eval;
 pub mod json;
 mod linear;
 mod phase;
+mod ride;
 mod simulate;
 mod spectrum;
 mod steady;
@@ -40,13 +42,15 @@ pub use linear::{
     LoopVerdict, PhaseMargin, PitchReport, StableMargins, LQR_STATES,
 };
 pub use phase::{portraits, Drive, PhaseResult, PhaseRun, PhaseSettings, Portrait, DEFAULT_TILTS};
+pub use ride::{ride, ride_verdict, RideResult, RideSettings, RideVerdict, RIDE_DECAY, RIDE_TAIL};
 pub use simulate::{
     recovery_of, simulate, InputDirections, Recovery, SimResult, SimSettings, MANEUVER_V_LOOP,
     RECOVERED_PHI,
 };
 pub use spectrum::{drift_states, spectrum, SpectrumResult, SpectrumSettings, Timing};
 pub use steady::{
-    steady_motion, SpeedPoint, SteadyResult, SteadySettings, SteadyVerdict, MAX_SPEEDS,
+    steady_motion, steady_state, SpeedPoint, SteadyResult, SteadySettings, SteadyVerdict,
+    MAX_SPEEDS,
 };
 pub use sweep::{
     compute_points, run_shard, status_counts, sweep, Computed, ShardOptions, ShardOutcome,

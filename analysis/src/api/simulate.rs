@@ -288,14 +288,7 @@ impl SimResult {
 
     /// The time series as CSV (header = `columns`, full precision).
     pub fn csv(&self) -> String {
-        let mut s = self.columns.join(",");
-        s.push('\n');
-        for r in &self.rows {
-            let cells: Vec<String> = r.iter().map(|v| format!("{v:e}")).collect();
-            s += &cells.join(",");
-            s.push('\n');
-        }
-        s
+        crate::output::csv_table(&self.columns, &self.rows)
     }
 
     /// (file name, figure) of every figure: Φ (with Φ_ref), Φ̇, v_x, x, the force, and v_y, θ

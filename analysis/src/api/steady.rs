@@ -125,6 +125,12 @@ struct Motion<'a> {
     mode_names: Vec<String>,
 }
 
+/// The state of the model's steady motion at `speed` (the bicycle: upright, straight, the rear
+/// wheel turning at speed / r_R), for a model whose IR describes one.
+pub fn steady_state(model: &ResolvedModel, speed: f64) -> Result<Vec<f64>> {
+    Ok(Motion::of(model)?.state(speed))
+}
+
 fn unsupported(ir: &Ir, reason: &str) -> Error {
     Error::Unsupported {
         model: ir.model().to_string(),
@@ -179,9 +185,14 @@ impl<'a> Motion<'a> {
         })
     }
 
+    /// The state of the steady motion at speed v.
+    fn state(&self, v: f64) -> Vec<f64> {
+        self.unit.iter().map(|s| v * s).collect()
+    }
+
     /// The studied eigenvalues at speed v, sorted.
     fn eigenvalues(&self, v: f64, work: &mut Vec<f64>) -> Result<Vec<(f64, f64)>> {
-        let x: Vec<f64> = self.unit.iter().map(|s| v * s).collect();
+        let x = self.state(v);
         let u = vec![0.0; self.nu];
         work.resize(self.jac.n_values(), 0.0);
         self.jac

@@ -105,7 +105,7 @@ pub fn dispatch_control<T: ControlTask>(
         model: model.to_string(),
         reason: "no pitch to control: the control jobs run vehicle8, vehicle7, segway7, or an IR \
                  model with 8, 7 or 4 states (phi, w_y among them) and 1 or 2 inputs (F1[, T2] \
-                 or tau_L, tau_R)"
+                 or tau_L, tau_R); for an uncontrolled run use `twv ride`"
             .to_string(),
     };
     match &resolved.engine {

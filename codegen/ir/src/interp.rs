@@ -303,6 +303,12 @@ impl<const NX: usize, const NU: usize> Model<NX, NU> for Interpreted<NX, NU> {
         f: &mut [f64; NX],
         out: &mut [[f64; NX]; K],
     ) {
+        // Without tangent vectors only f is needed: the IR's `f` gives the same bits as the `f`
+        // of `f_jac_x` (every division goes through the same lowering) at a fraction of the
+        // work (the bicycle: 5k operations instead of 33k).
+        if K == 0 {
+            return self.vector("f", x, u, f);
+        }
         let p = &*self.program;
         let ran = self.run("f_jac_x", x, u, |func, vals| {
             f.fill(0.0);

@@ -8,6 +8,7 @@ mod common;
 mod api;
 mod api_json;
 mod audit;
+mod bicycle_runs;
 mod codegen;
 mod control;
 mod hand_file;

@@ -10,6 +10,7 @@ pub mod lyap;
 pub mod merge;
 pub mod phase;
 pub mod report;
+pub mod ride;
 pub mod sim;
 pub mod sweep;
 pub mod tune;
@@ -27,6 +28,7 @@ pub fn run(command: &Command, ctx: &Context) -> Result<Outcome> {
         Command::Audit(a) => audit::run(a, ctx),
         Command::Lyap(a) => lyap::run(a, ctx),
         Command::Sim(a) => sim::run(a, ctx),
+        Command::Ride(a) => ride::run(a, ctx),
         Command::Disturb(a) => disturb::run(a, ctx),
         Command::Phase(a) => phase::run(a, ctx),
         Command::Linear(a) => linear::run(a, ctx),

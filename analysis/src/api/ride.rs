@@ -1,0 +1,314 @@
+//! An uncontrolled run: the model under constant inputs from a state, or from its steady motion
+//! at a speed with some states pushed — `twv ride`. What the bicycle does when nobody steers:
+//! inside its self-stable speed range a small push in lean dies out, outside it grows into a
+//! fall. The verdict is computed from the run with the thresholds below.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+use twv_model::Model;
+
+use crate::control::{simulate as integrate, RunEnd, RunSettings};
+use crate::error::{Error, Result};
+use crate::integrate::OpenLoop;
+use crate::model::{dispatch, input_vector, state_vector, ModelTask, ResolvedModel};
+use crate::output::Files;
+use crate::plot::{Curve, Figure, LineChart};
+use crate::progress::Progress;
+
+/// The last part of a run whose largest |watched state| is compared with the whole run's.
+pub const RIDE_TAIL: f64 = 0.1;
+
+/// A run recovered when the largest |watched state| over its last [`RIDE_TAIL`] is at most
+/// this fraction of the largest over the whole run: the disturbance has died out to a tenth.
+pub const RIDE_DECAY: f64 = 0.1;
+
+/// An uncontrolled run. Defaults beside each field.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RideSettings {
+    /// Initial state in the model's order; `None`: the steady motion at `speed` (or rest).
+    pub x0: Option<Vec<f64>>,
+    /// Start from the model's steady motion at this speed [m/s] (a model whose IR describes
+    /// one, e.g. the bicycle's straight running). Default none: at rest.
+    pub speed: Option<f64>,
+    /// Values added to named states of the initial state (a push: `w_phi = 0.05`).
+    pub perturb: BTreeMap<String, f64>,
+    /// Constant inputs in the model's order. Default all zero.
+    pub u: Option<Vec<f64>>,
+    /// The state whose decay is judged and whose size stops the run (`run.fall_angle`).
+    /// Default `phi` (the bicycle's lean, the vehicles' pitch).
+    pub watch: String,
+    /// Length, sampling, integrator; `fall_angle` applies to `watch`. Default 10 s, RK4 at
+    /// 1 ms, fall at π/2.
+    pub run: RunSettings,
+}
+
+impl Default for RideSettings {
+    fn default() -> Self {
+        Self {
+            x0: None,
+            speed: None,
+            perturb: BTreeMap::new(),
+            u: None,
+            watch: "phi".into(),
+            run: RunSettings::default(),
+        }
+    }
+}
+
+impl RideSettings {
+    /// Checks the settings (the state and input sizes are checked against the model).
+    pub fn validate(&self) -> Result<()> {
+        self.run.validate()?;
+        if let Some(v) = self.speed {
+            if !v.is_finite() {
+                return Err(Error::input("speed", format!("{v} must be finite")));
+            }
+            if self.x0.is_some() {
+                return Err(Error::input(
+                    "speed",
+                    "give either an initial state (x0) or a speed, not both",
+                ));
+            }
+        }
+        for (name, v) in &self.perturb {
+            if !v.is_finite() {
+                return Err(Error::input(
+                    "perturb",
+                    format!("{name} = {v} must be finite"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// How the run is judged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RideVerdict {
+    /// Completed, and the largest |watch| over the last [`RIDE_TAIL`] of the run is at most
+    /// [`RIDE_DECAY`] times the largest over the run.
+    Recovered,
+    /// Completed without dying out that far.
+    NotRecovered,
+    /// |watch| passed the fall angle.
+    Fell,
+    /// The watched state stayed exactly at zero: nothing to recover from.
+    Undisturbed,
+}
+
+/// One uncontrolled run.
+#[derive(Debug, Clone, Serialize)]
+pub struct RideResult {
+    pub model: String,
+    /// Where the parameters came from.
+    pub params: String,
+    pub x0: Vec<f64>,
+    pub u: Vec<f64>,
+    pub speed: Option<f64>,
+    pub watch: String,
+    pub run: RunSettings,
+    pub end: RunEnd,
+    /// Largest |watch| over the run.
+    pub peak: f64,
+    /// Largest |watch| over the last [`RIDE_TAIL`] of the run.
+    pub tail_peak: f64,
+    /// |watch| at the end.
+    pub final_value: f64,
+    pub verdict: RideVerdict,
+    /// CSV column names: t, then the states.
+    #[serde(skip)]
+    pub columns: Vec<String>,
+    /// CSV rows.
+    #[serde(skip)]
+    pub rows: Vec<Vec<f64>>,
+}
+
+/// The verdict from the watched state's samples and how the run ended.
+pub fn ride_verdict(end: &RunEnd, watched: &[f64]) -> (RideVerdict, f64, f64) {
+    let peak = watched.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let tail_from = ((watched.len() as f64) * (1.0 - RIDE_TAIL)).floor() as usize;
+    let tail_peak = watched[tail_from.min(watched.len() - 1)..]
+        .iter()
+        .fold(0.0_f64, |m, v| m.max(v.abs()));
+    let verdict = match end {
+        RunEnd::Fell { .. } => RideVerdict::Fell,
+        RunEnd::Completed if peak == 0.0 => RideVerdict::Undisturbed,
+        RunEnd::Completed if tail_peak <= RIDE_DECAY * peak => RideVerdict::Recovered,
+        RunEnd::Completed => RideVerdict::NotRecovered,
+    };
+    (verdict, peak, tail_peak)
+}
+
+/// The initial state of `settings` on `model`: x0, or the steady motion at `speed`, or rest,
+/// plus the pushes.
+fn initial_state(model: &ResolvedModel, s: &RideSettings) -> Result<Vec<f64>> {
+    let mut x = match (&s.x0, s.speed) {
+        (Some(x), _) => x.clone(),
+        (None, Some(v)) => super::steady::steady_state(model, v)?,
+        (None, None) => vec![0.0; model.states().len()],
+    };
+    for (name, dv) in &s.perturb {
+        let i = model.state_index(name).ok_or_else(|| {
+            Error::input(
+                "perturb",
+                format!(
+                    "`{name}` is not a state of {} (states: {})",
+                    model.name(),
+                    model.states().join(", ")
+                ),
+            )
+        })?;
+        if let Some(xi) = x.get_mut(i) {
+            *xi += dv;
+        }
+    }
+    Ok(x)
+}
+
+struct Ride<'a>(&'a RideSettings, &'a dyn Progress);
+
+impl ModelTask for Ride<'_> {
+    type Output = RideResult;
+    fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
+        self,
+        model: &M,
+        resolved: &ResolvedModel,
+    ) -> Result<RideResult> {
+        let s = self.0;
+        let info = model.info();
+        let watch = resolved.state_index(&s.watch).ok_or_else(|| {
+            Error::input(
+                "watch",
+                format!(
+                    "`{}` is not a state of {} (states: {})",
+                    s.watch,
+                    resolved.name(),
+                    info.states.join(", ")
+                ),
+            )
+        })?;
+        let x0: [f64; NX] = state_vector("x0", &initial_state(resolved, s)?, info.states)?;
+        let u_given = s.u.clone().unwrap_or_else(|| vec![0.0; info.inputs.len()]);
+        let u: [f64; NU] = input_vector("u", &u_given, info.inputs)?;
+        let traj = integrate(OpenLoop::new(model, u), &x0, watch, &s.run, self.1)?;
+        let watched = traj.component(watch);
+        let (verdict, peak, tail_peak) = ride_verdict(&traj.end, &watched);
+        let mut columns = vec!["t".to_string()];
+        columns.extend(info.states.iter().map(|n| n.to_string()));
+        let rows = traj
+            .t
+            .iter()
+            .zip(&traj.x)
+            .map(|(t, x)| std::iter::once(*t).chain(x.iter().copied()).collect())
+            .collect();
+        Ok(RideResult {
+            model: resolved.name().to_string(),
+            params: resolved.params_origin.clone(),
+            x0: x0.to_vec(),
+            u: u_given,
+            speed: s.speed,
+            watch: s.watch.clone(),
+            run: s.run,
+            end: traj.end,
+            peak,
+            tail_peak,
+            final_value: watched.last().map_or(0.0, |v| v.abs()),
+            verdict,
+            columns,
+            rows,
+        })
+    }
+}
+
+/// Runs the model uncontrolled under `settings`.
+pub fn ride(
+    model: &ResolvedModel,
+    settings: &RideSettings,
+    progress: &dyn Progress,
+) -> Result<RideResult> {
+    settings.validate()?;
+    dispatch(model, Ride(settings, progress))
+}
+
+impl RideResult {
+    /// The time series as CSV (header = `columns`, full precision).
+    pub fn csv(&self) -> String {
+        crate::output::csv_table(&self.columns, &self.rows)
+    }
+
+    /// One figure per state that moves (the watched state first).
+    pub fn figures(&self) -> Vec<(String, Figure)> {
+        let mut names: Vec<&String> = self.columns[1..].iter().collect();
+        names.sort_by_key(|n| **n != self.watch);
+        names
+            .into_iter()
+            .filter_map(|name| {
+                let i = self.columns.iter().position(|c| c == name)?;
+                let points: Vec<(f64, f64)> = self.rows.iter().map(|r| (r[0], r[i])).collect();
+                let first = points[0].1;
+                points.iter().any(|p| p.1 != first).then(|| {
+                    let title = format!("{} uncontrolled — {name}", self.model);
+                    let curve = Curve {
+                        name: name.clone(),
+                        points,
+                    };
+                    let chart = LineChart::new(&title, "t [s]", name, (800, 450), vec![curve]);
+                    (format!("{name}.svg"), Figure::Line(chart))
+                })
+            })
+            .collect()
+    }
+
+    /// ride.csv, ride.json and the figures (SVG and PNG).
+    pub fn files(&self) -> Result<Files> {
+        let mut f = Files::new();
+        f.text("ride.csv", self.csv());
+        f.json("ride.json", self);
+        for (name, figure) in self.figures() {
+            f.figure(&name, &figure)?;
+        }
+        Ok(f)
+    }
+
+    /// A few readable lines with the verdict and its threshold.
+    pub fn summary(&self) -> String {
+        let start = match self.speed {
+            Some(v) => format!("from its steady motion at {v} m/s"),
+            None => "from the given state".to_string(),
+        };
+        let verdict = match self.verdict {
+            RideVerdict::Recovered => format!(
+                "recovered: |{}| over the last {:.0} % is {:.3e}, ≤ {} × its peak {:.3e}",
+                self.watch,
+                100.0 * RIDE_TAIL,
+                self.tail_peak,
+                RIDE_DECAY,
+                self.peak
+            ),
+            RideVerdict::NotRecovered => format!(
+                "NOT recovered: |{}| over the last {:.0} % is {:.3e}, > {} × its peak {:.3e}",
+                self.watch,
+                100.0 * RIDE_TAIL,
+                self.tail_peak,
+                RIDE_DECAY,
+                self.peak
+            ),
+            RideVerdict::Fell => match self.end {
+                RunEnd::Fell { t, phi } => format!(
+                    "FELL: |{}| passed {} at t = {t:.3} s ({phi:+.3})",
+                    self.watch,
+                    self.run.fall_angle.unwrap_or(f64::INFINITY)
+                ),
+                RunEnd::Completed => "FELL".to_string(),
+            },
+            RideVerdict::Undisturbed => format!("{} stayed at zero: undisturbed", self.watch),
+        };
+        format!(
+            "{} uncontrolled {start}, {} s ({}): {verdict}\n",
+            self.model, self.run.t_end, self.params
+        )
+    }
+}
