@@ -114,13 +114,19 @@ pub struct HandAuditReport {
 }
 
 /// The derived model's quantities at one sample, dense.
-struct Derived<'a> {
-    ir: &'a Ir,
-    work: Vec<f64>,
+pub(super) struct Derived<'a> {
+    pub(super) ir: &'a Ir,
+    pub(super) work: Vec<f64>,
 }
 
 impl Derived<'_> {
-    fn dense(&mut self, function: &str, x: &[f64], u: &[f64], p: &[f64]) -> Result<Vec<f64>> {
+    pub(super) fn dense(
+        &mut self,
+        function: &str,
+        x: &[f64],
+        u: &[f64],
+        p: &[f64],
+    ) -> Result<Vec<f64>> {
         let f = self
             .ir
             .function(function)
@@ -177,6 +183,8 @@ impl Hand<'_> {
                 out.extend(rhs);
                 out
             }
+            // Audited about its steady motion by `linear`, never sampled here.
+            HandForm::Linear { .. } => Vec::new(),
         }
     }
 
@@ -239,6 +247,7 @@ fn quantities<'a>(form: &'a HandForm, states: &[String], speeds: &[String]) -> V
             vector("f", &states, qdot.iter().collect()),
             matrix("jac_x", &states, vec![]),
         ],
+        HandForm::Linear { .. } => vec![],
     }
 }
 
@@ -277,7 +286,11 @@ fn difference(
 /// The parameters of each sample: the given values, and for every second random sample each
 /// value times a factor log-uniform in [1/spread, spread] (its own stream, so that the states
 /// are those of the built-in audit for the same seed).
-fn sample_params(params: &[f64], n: usize, settings: &HandAuditSettings) -> Vec<Option<Vec<f64>>> {
+pub(super) fn sample_params(
+    params: &[f64],
+    n: usize,
+    settings: &HandAuditSettings,
+) -> Vec<Option<Vec<f64>>> {
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0x005e_ed0f_ba5e);
     let ln = settings.param_spread.ln();
     (0..n)
@@ -292,6 +305,21 @@ fn sample_params(params: &[f64], n: usize, settings: &HandAuditSettings) -> Vec<
         .collect()
 }
 
+/// The parameters the model uses with their values, where a sample varied them (empty: the
+/// given values).
+pub(super) fn used_params(ir: &Ir, varied: Option<&[f64]>) -> Vec<(String, f64)> {
+    varied
+        .map(|p| {
+            ir.params()
+                .iter()
+                .zip(p)
+                .filter(|(param, _)| param.used)
+                .map(|(param, v)| (param.name.clone(), *v))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// Audits the hand model `hand` against the derived model (`ir` with `params`, the interpreter:
 /// the same bits as the generated code).
 pub fn audit_hand_model(
@@ -301,6 +329,9 @@ pub fn audit_hand_model(
     settings: &HandAuditSettings,
 ) -> Result<HandAuditReport> {
     settings.validate()?;
+    if let HandForm::Linear { .. } = hand.form {
+        return super::linear::audit_linear(ir, params, hand, settings);
+    }
     let states: Vec<String> = ir.states().iter().map(|s| s.name.clone()).collect();
     let inputs: Vec<String> = ir.inputs().iter().map(|s| s.name.clone()).collect();
     let param_names: Vec<String> = ir.params().iter().map(|p| p.name.clone()).collect();
@@ -363,18 +394,7 @@ pub fn audit_hand_model(
             }
             let hand_entry = q.hand.get(index);
             let (x, u) = &samples[entry.worst_sample];
-            // The parameters the model uses, where they were varied.
-            let worst_params: Vec<(String, f64)> = varied[entry.worst_sample]
-                .as_deref()
-                .map(|p| {
-                    ir.params()
-                        .iter()
-                        .zip(p)
-                        .filter(|(param, _)| param.used)
-                        .map(|(param, v)| (param.name.clone(), *v))
-                        .collect()
-                })
-                .unwrap_or_default();
+            let worst_params = used_params(ir, varied[entry.worst_sample].as_deref());
             disagreements.push(Disagreement {
                 label: entry.label.clone(),
                 line: hand_entry.map_or(0, |e| e.line),
@@ -401,6 +421,7 @@ pub fn audit_hand_model(
         form: match hand.form {
             HandForm::Explicit { .. } => "f",
             HandForm::Mechanical { .. } => "mechanical",
+            HandForm::Linear { .. } => "linear",
         },
         samples: samples.len(),
         seed: settings.seed,
@@ -427,8 +448,9 @@ impl Disagreement {
             0 => String::new(),
             n => format!(" (line {n})"),
         };
+        let at = if self.x.is_empty() { "" } else { " at " };
         let mut text = format!(
-            "{}{line}: relative error {:.3e} at {}{}{}",
+            "{}{line}: relative error {:.3e}{at}{}{}{}",
             self.label,
             self.max_rel,
             format_named(&self.x),

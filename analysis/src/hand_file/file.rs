@@ -50,6 +50,19 @@ pub enum HandForm {
     },
     /// Only ẋ = f(x, u), one per state.
     Explicit { f: Vec<Entry> },
+    /// The equations linearised about the model's steady motion (the bicycle benchmark's form),
+    /// M q̈ + v C1 q̇ + (g K0 + v² K2) q = f, q the coordinates of the steady motion's modes;
+    /// formulas in the parameters only.
+    Linear {
+        /// q: the modes' coordinates (the first half of `mechanics.steady_motion.modes`).
+        coordinates: Vec<String>,
+        /// Their rates among the modes (the second half).
+        rates: Vec<String>,
+        mass: Vec<Vec<Entry>>,
+        c1: Vec<Vec<Entry>>,
+        k0: Vec<Vec<Entry>>,
+        k2: Vec<Vec<Entry>>,
+    },
 }
 
 /// A user's hand model, read against one model IR.
@@ -93,6 +106,21 @@ struct Document {
     inputs: Option<Vector>,
     qdot: Option<Vector>,
     f: Option<Vector>,
+    linear: Option<LinearTables>,
+}
+
+/// `[linear.M]`, `[linear.C1]`, `[linear.K0]`, `[linear.K2]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LinearTables {
+    #[serde(rename = "M")]
+    mass: Option<Matrix>,
+    #[serde(rename = "C1")]
+    c1: Option<Matrix>,
+    #[serde(rename = "K0")]
+    k0: Option<Matrix>,
+    #[serde(rename = "K2")]
+    k2: Option<Matrix>,
 }
 
 /// Where offsets of the file are.
@@ -184,10 +212,11 @@ impl Source<'_> {
             .collect()
     }
 
-    /// A matrix given by rows (`w_y = ["…", "…"]`), rows and columns in the order of `names`.
+    /// A matrix given by rows (`w_y = ["…", "…"]`), rows and columns in the order of `names`
+    /// (the model's `what`, for messages).
     fn matrix(
         &self,
-        table: &str,
+        (table, what): (&str, &str),
         value: &Matrix,
         names: &[String],
         scope: &Scope,
@@ -206,7 +235,7 @@ impl Source<'_> {
                     return Err(self.error(
                         entries.span().start,
                         format!(
-                            "{table}[{row}] has {} entries, the model has {} speeds ({})",
+                            "{table}[{row}] has {} entries, the model has {} {what} ({})",
                             entries.get_ref().len(),
                             names.len(),
                             names.join(", ")
@@ -245,12 +274,16 @@ fn state_names(ir: &Ir) -> Vec<String> {
     ir.states().iter().map(|s| s.name.clone()).collect()
 }
 
-/// The names formulas may use, and the model's state, input and parameter names.
-fn base_scope(ir: &Ir) -> Scope {
+/// The names formulas may use: pi and the model's parameter names, and unless `params_only`
+/// (the linear form, whose matrices depend on the parameters alone) its state and input names.
+fn base_scope(ir: &Ir, params_only: bool) -> Scope {
     let mut scope = Scope::new();
     scope.insert("pi".into(), Expr::Num(std::f64::consts::PI));
     for (i, p) in ir.params().iter().enumerate() {
         scope.insert(p.name.clone(), Expr::Var(Var::P(i)));
+    }
+    if params_only {
+        return scope;
     }
     for (i, s) in ir.inputs().iter().enumerate() {
         scope.insert(s.name.clone(), Expr::Var(Var::U(i)));
@@ -330,6 +363,35 @@ fn mechanical_names(
     Ok((coords, speeds))
 }
 
+/// The coordinates and rates of the steady motion's modes (its first and second half), for the
+/// linear form.
+fn linear_names(ir: &Ir, src: &Source<'_>) -> Result<(Vec<String>, Vec<String>), HandFileError> {
+    let fail = |message: String| HandFileError {
+        file: src.origin.to_string(),
+        line: 0,
+        message,
+    };
+    let motion = ir
+        .mechanics()
+        .and_then(|m| m.steady_motion.as_ref())
+        .ok_or_else(|| {
+            fail(format!(
+                "model `{}` describes no steady motion (mechanics.steady_motion): the linear form \
+                 needs one",
+                ir.model()
+            ))
+        })?;
+    let half = motion.modes.len() / 2;
+    if motion.modes.len() % 2 != 0 || half == 0 {
+        return Err(fail(format!(
+            "model `{}`: its steady motion's modes ({}) are not coordinates followed by their rates",
+            ir.model(),
+            motion.modes.join(", ")
+        )));
+    }
+    Ok((motion.modes[..half].to_vec(), motion.modes[half..].to_vec()))
+}
+
 /// Reads the hand file `text` (named `origin` in messages) against the model `ir`.
 pub fn read_hand_file(text: &str, origin: &str, ir: &Ir) -> Result<HandModel, HandFileError> {
     let list = |names: Vec<&str>| names.join(", ");
@@ -356,7 +418,7 @@ pub fn read_hand_file(text: &str, origin: &str, ir: &Ir) -> Result<HandModel, Ha
             ));
         }
     }
-    let mut scope = base_scope(ir);
+    let mut scope = base_scope(ir, doc.linear.is_some());
     if let Some(lets) = &doc.lets {
         add_lets(&src, lets, &mut scope)?;
     }
@@ -373,27 +435,61 @@ pub fn read_hand_file(text: &str, origin: &str, ir: &Ir) -> Result<HandModel, Ha
         line: 0,
         message,
     };
-    let form = match (&doc.f, mechanical.iter().any(|m| *m)) {
-        (Some(_), true) => return Err(whole_file(
-            "give either [f] or the mechanical form ([M], [Cp] or [C], [F], [Q], [qdot]), not both"
-                .into(),
-        )),
-        (None, false) => {
+    let forms_given = [
+        doc.f.is_some(),
+        mechanical.iter().any(|m| *m),
+        doc.linear.is_some(),
+    ];
+    match forms_given.iter().filter(|given| **given).count() {
+        0 => {
             return Err(whole_file(
-                "no equations: give [M], [Cp] or [C], [F], [Q] and [qdot], or only [f]".into(),
+                "no equations: give [M], [Cp] or [C], [F], [Q] and [qdot], or only [f], or the \
+                 linear form [linear.M], [linear.C1], [linear.K0], [linear.K2]"
+                    .into(),
             ))
         }
-        (Some(f), false) => {
+        1 => {}
+        _ => {
+            return Err(whole_file(
+                "give one form: [f], the mechanical form ([M], [Cp] or [C], [F], [Q], [qdot]), \
+                 or the linear form ([linear.*]), not several"
+                    .into(),
+            ))
+        }
+    }
+    let form = match (&doc.f, &doc.linear) {
+        (None, Some(tables)) => {
+            let (coordinates, rates) = linear_names(ir, &src)?;
+            let missing =
+                |table: &str| whole_file(format!("the linear form needs [linear.{table}]"));
+            let matrix = |table: &str, value: &Option<Matrix>| {
+                src.matrix(
+                    (table, "coordinates in its steady motion's modes"),
+                    value.as_ref().ok_or_else(|| missing(table))?,
+                    &coordinates,
+                    &scope,
+                )
+            };
+            HandForm::Linear {
+                mass: matrix("M", &tables.mass)?,
+                c1: matrix("C1", &tables.c1)?,
+                k0: matrix("K0", &tables.k0)?,
+                k2: matrix("K2", &tables.k2)?,
+                coordinates,
+                rates,
+            }
+        }
+        (Some(f), _) => {
             let states = state_names(ir);
             HandForm::Explicit {
                 f: src.vector("f", f, &states, &scope)?,
             }
         }
-        (None, true) => {
+        (None, None) => {
             let (coords, speeds) = mechanical_names(ir, &src)?;
             let missing = |table: &str| whole_file(format!("the mechanical form needs [{table}]"));
             let mass = src.matrix(
-                "M",
+                ("M", "speeds"),
                 doc.mass.as_ref().ok_or_else(|| missing("M"))?,
                 &speeds,
                 &scope,
@@ -407,7 +503,7 @@ pub fn read_hand_file(text: &str, origin: &str, ir: &Ir) -> Result<HandModel, Ha
                 (None, None) => return Err(missing("Cp] or [C")),
                 (Some(cp), None) => (src.vector("Cp", cp, &speeds, &scope)?, false),
                 (None, Some(c)) => {
-                    let rows = src.matrix("C", c, &speeds, &scope)?;
+                    let rows = src.matrix(("C", "speeds"), c, &speeds, &scope)?;
                     (coriolis_times_speeds(rows, coords.len()), true)
                 }
             };

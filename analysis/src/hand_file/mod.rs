@@ -4,7 +4,8 @@
 //! - [`file`]: the format (README "Your own hand model") and its one-line errors;
 //! - [`parse`] and [`expr`]: one formula, evaluated for values and exact derivatives;
 //! - [`normal`] and [`from_ir`]: canonical forms, so a disagreement prints as the missing term;
-//! - [`audit`]: the comparison and its report.
+//! - [`audit`]: the comparison and its report; `linear`: the same for the equations
+//!   linearised about a steady motion (the bicycle benchmark's M, C1, K0, K2).
 //!
 //! The built-in hand model of the shipped vehicles ([`crate::hand_model`]) is Rust code; this is
 //! the same audit for a model the user derived, of any shipped or IR vehicle.
@@ -13,6 +14,7 @@ pub mod audit;
 pub mod expr;
 pub mod file;
 mod from_ir;
+mod linear;
 pub mod normal;
 pub mod parse;
 

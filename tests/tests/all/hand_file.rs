@@ -128,7 +128,7 @@ mod audit {
     fn resolved(model: &str) -> ResolvedModel {
         let params = match model {
             "segway7" => ParamSource::File(repo("vehicles/segway.toml")),
-            "lorenz" => ParamSource::Defaults,
+            "lorenz" | "whipple" => ParamSource::Defaults,
             _ => ParamSource::File(repo("vehicles/paper.toml")),
         };
         ModelSpec {
@@ -346,5 +346,83 @@ mod audit {
             assert_eq!(first.label, "Cp[v_x]");
             assert_eq!(first.difference.as_deref(), Some("m1*b*cos(phi)"), "{form}");
         }
+    }
+
+    /// (from, to, the first disagreeing entry) planted into the bicycle's linear form.
+    const PLANTED_LINEAR: [(&str, &str, &str); 3] = [
+        // A dropped gyrostatic term of the front wheel.
+        ("S_F*cos(lambda) + I_Txz", "I_Txz", "C1[phi,delta]"),
+        // A flipped gravity sign.
+        (
+            "[\"m_T*z_T\", \"-S_A\"]",
+            "[\"-m_T*z_T\", \"-S_A\"]",
+            "K0[phi,phi]",
+        ),
+        // A wrong inertia in a [let] name used by M and C1.
+        (
+            "I_Tzz = \"I_Rxx + I_Bzz",
+            "I_Tzz = \"I_Rxx + I_Byy",
+            "M[delta,delta]",
+        ),
+    ];
+
+    #[test]
+    fn the_bicycles_linearised_benchmark_equations_agree_with_the_derivation() {
+        let model = resolved("whipple");
+        let report = audit_text(&model, &hand_text("whipple"));
+        assert!(report.passed, "{}", report.table());
+        assert_eq!(report.form, "linear");
+        let names: Vec<&str> = report.quantities.iter().map(|q| q.quantity).collect();
+        assert_eq!(names, ["M", "C1", "K0", "K2", "A"]);
+        for q in &report.quantities {
+            assert!(q.max_rel < 1e-13, "{}: {:e}", q.quantity, q.max_rel);
+        }
+        for (from, to, entry) in PLANTED_LINEAR {
+            let report = audit_text(&model, &plant(&hand_text("whipple"), from, to));
+            assert!(!report.passed, "{from} -> {to}");
+            let first = &report.disagreements[0];
+            assert_eq!(first.label, entry, "{}", report.table());
+            assert!(first.line > 0 && first.max_rel > 1e-3, "{first:?}");
+            // The derived matrices hold M⁻¹: no symbolic difference, but the state matrices at
+            // some speed disagree too, and name it.
+            assert!(first.difference.is_none());
+            let a = report
+                .disagreements
+                .iter()
+                .find(|d| d.label.starts_with("A["))
+                .expect("the state matrix disagrees too");
+            assert_eq!(a.x[0].0, "v");
+        }
+    }
+
+    #[test]
+    fn a_linear_form_needs_a_steady_motion_and_parameters_only() {
+        let err = |model: &str, text: &str| {
+            let source = HandSource::Text {
+                text: text.to_string(),
+                origin: "lin.toml".into(),
+            };
+            audit_hand(&resolved(model), &source, &HandAuditSettings::default())
+                .unwrap_err()
+                .to_string()
+        };
+        let matrix = "phi = [\"1\", \"0\"]\ndelta = [\"0\", \"1\"]\n";
+        let text =
+            |m: &str| format!("[linear.M]\n{m}[linear.C1]\n{m}[linear.K0]\n{m}[linear.K2]\n{m}");
+        let e = err("vehicle8", &text(matrix));
+        assert!(e.contains("describes no steady motion"), "{e}");
+        let with_state = "phi = [\"phi\", \"0\"]\ndelta = [\"0\", \"1\"]\n";
+        let e = err("whipple", &text(with_state));
+        assert!(
+            e.contains("lin.toml:2") && e.contains("unknown name `phi`"),
+            "{e}"
+        );
+        let e = err(
+            "whipple",
+            "[linear.M]\nphi = [\"1\"]\ndelta = [\"0\", \"1\"]\n",
+        );
+        assert!(e.contains("M[phi] has 1 entries"), "{e}");
+        let e = err("whipple", &(text(matrix) + "[f]\nphi = 0\n"));
+        assert!(e.contains("give one form"), "{e}");
     }
 }
