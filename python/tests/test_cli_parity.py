@@ -206,3 +206,40 @@ def test_the_uncontrolled_bicycle_rides():
         assert py.verdict == verdict
         assert py.columns[:5] == ["t", "psi", "x", "y", "phi"]
         assert py.series["w_R"][0] == speed / 0.3
+
+
+def test_a_sweep_over_parameters_equals_the_shard_file(vehicle8, tmp_path):
+    import subprocess
+
+    subprocess.run(
+        [
+            str(twv_binary()),
+            "sweep",
+            "--kp",
+            "0:4000:9",
+            "--param",
+            "m2=4:20:3",
+            "--param",
+            "b=0.3:0.9:2",
+            "--metric",
+            "spectral-abscissa",
+            "--out",
+            str(tmp_path),
+            "--quiet",
+        ],
+        check=True,
+    )
+    shard = json.loads((tmp_path / "shard-0-of-1.json").read_text())
+    py = twv.sweep(
+        vehicle8,
+        kp=(0, 4000, 9),
+        kd=(1980, 1980, 1),
+        params={"m2": (4, 20, 3), "b": (0.3, 0.9, 2)},
+        metric="spectral-abscissa",
+    )
+    assert py.points == shard["points"]
+    assert py.value.shape == (2, 3, 1, 1, 9)
+    assert list(py.params) == ["m2", "b"] and py.params["m2"].tolist() == [4.0, 12.0, 20.0]
+    # The boundary moves to higher Kp with the heavier pendulum: fewer stable points.
+    stable = (py.value < 0).sum(axis=(2, 3, 4))
+    assert (np.diff(stable, axis=1) <= 0).all()

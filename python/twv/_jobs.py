@@ -324,15 +324,21 @@ def sweep(
     tilt: float = 0.1,
     x0=None,
     controller: dict[str, Any] | None = None,
+    params: dict[str, Any] | None = None,
     executor: Executor | None = None,
     shards: int | None = None,
 ) -> SweepResult:
-    """A stability map over a (Kp, Kd[, Ki]) grid, each axis (lo, hi, n): `max-lyapunov`,
-    `spectral-abscissa` or `settling-time`, from a tilt [rad] under the controller's other
-    settings. Runs in parallel in Rust; with an `executor` (a concurrent.futures pool, a
-    dask.distributed Client) its shards run there instead and are joined in index order."""
+    """A stability map over a (Kp, Kd[, Ki]) grid, each axis (lo, hi, n), and over model
+    parameters, `params={"m2": (4, 20, 17), ...}` by the IR's parameter names (each slower than
+    the gains and the ones before it): `max-lyapunov`, `spectral-abscissa` or `settling-time`,
+    from a tilt [rad] under the controller's other settings. Runs in parallel in Rust; with an
+    `executor` (a concurrent.futures pool, a dask.distributed Client) its shards run there
+    instead and are joined in index order."""
+    grid: dict[str, Any] = {"kp": _axis("kp", kp), "kd": _axis("kd", kd), "ki": _axis("ki", ki)}
+    if params:
+        grid["params"] = [{"name": str(k), **_axis(str(k), v)} for k, v in params.items()]
     settings: dict[str, Any] = {
-        "grid": {"kp": _axis("kp", kp), "kd": _axis("kd", kd), "ki": _axis("ki", ki)},
+        "grid": grid,
         "metric": metric,
         "tilt": float(tilt),
         "x0": None if x0 is None else vector("x0", x0),

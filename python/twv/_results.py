@@ -130,9 +130,19 @@ class TuneResult(Result):
         return None if cert is None else cert["gains"]
 
 
+def _axis_values(axis: dict[str, Any]) -> np.ndarray:
+    """An axis's values exactly as the library computes them (lo + (hi - lo)·i/(n - 1), the
+    last one hi)."""
+    lo, hi, n = axis["lo"], axis["hi"], axis["n"]
+    if n == 1:
+        return np.array([lo])
+    return np.array([hi if i == n - 1 else lo + (hi - lo) * (i / (n - 1)) for i in range(n)])
+
+
 class SweepResult:
-    """A map over a (Kp, Kd[, Ki]) grid: `value[ki, kd, kp]` (NaN unless `status` is ok) and
-    `status` of the same shape, with the axes `kp`, `kd`, `ki`."""
+    """A map over a (Kp, Kd[, Ki]) grid and model parameters: `value[..., p2, p1, ki, kd, kp]`
+    (the parameter axes in reverse order in front; NaN unless `status` is ok) and `status` of
+    the same shape, with the axes `kp`, `kd`, `ki` and `params` ({name: values})."""
 
     def __init__(self, settings: dict[str, Any], points: list[dict[str, Any]]):
         self.settings = settings
@@ -145,7 +155,13 @@ class SweepResult:
         self.kp = np.array([p["kp"] for p in points[:n_kp]])
         self.kd = np.array([p["kd"] for p in points[: n_kp * n_kd : n_kp]])
         self.ki = np.array([p["ki"] for p in points[:: n_kp * n_kd]][:n_ki])
-        shape = (len(self.ki), len(self.kd), len(self.kp))
+        self.params = {a["name"]: _axis_values(a) for a in grid.get("params", [])}
+        shape = (
+            *(len(v) for v in reversed(self.params.values())),
+            len(self.ki),
+            len(self.kd),
+            len(self.kp),
+        )
         value = np.full(len(points), np.nan)
         status = np.empty(len(points), dtype=object)
         for i, p in enumerate(points):

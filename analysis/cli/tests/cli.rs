@@ -539,3 +539,70 @@ fn ride_of_the_uncontrolled_bicycle() {
         &["no pitch to control", "twv ride"],
     );
 }
+
+/// `twv sweep --param NAME=A:B:N`: a map over model parameters at the study's PD (no --kp or
+/// --kd needed), merged with the parameters as columns and axes; bad axes named.
+#[test]
+fn sweep_over_model_parameters() {
+    let dir = scratch("param-sweep");
+    let out = dir.join("map");
+    let run = twv(&[
+        "sweep",
+        "--param",
+        "m2=4:20:3",
+        "--param",
+        "b=0.2:1.0:3",
+        "--metric",
+        "spectral-abscissa",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let merged = twv(&["merge", out.to_str().unwrap()]);
+    assert!(
+        merged.status.success(),
+        "{}",
+        String::from_utf8_lossy(&merged.stderr)
+    );
+    let csv = std::fs::read_to_string(out.join("map.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("index,kp,ki,kd,m2,b,value,status"));
+    // Row 4: m2 = 12 (the second m2), b = 0.2 + 0.8/2 (the second b, as computed), the PD.
+    assert!(lines.nth(4).unwrap().starts_with("4,3860,0,1980,12,0.6000000000000001,"));
+    let svg = std::fs::read_to_string(out.join("map.svg")).unwrap();
+    assert!(
+        svg.contains("\nm2\n") && svg.contains("\nb\n"),
+        "axes named after the parameters"
+    );
+
+    fails_with(
+        &twv(&[
+            "sweep",
+            "--param",
+            "mass=1:2:2",
+            "--metric",
+            "spectral-abscissa",
+            "--out",
+            dir.join("bad").to_str().unwrap(),
+        ]),
+        &["`mass` is not a parameter of vehicle8"],
+    );
+    fails_with(
+        &twv(&[
+            "sweep",
+            "--metric",
+            "spectral-abscissa",
+            "--out",
+            dir.join("bad").to_str().unwrap(),
+        ]),
+        &["--kp is required"],
+    );
+    assert!(
+        !dir.join("bad").exists(),
+        "nothing written for a refused sweep"
+    );
+}

@@ -73,8 +73,10 @@ impl SweepSettings {
     /// The sweep's config for `model` (everything a point depends on besides its index),
     /// validated.
     pub fn config(&self, model: &ResolvedModel) -> Result<SweepConfig> {
-        let n = self.grid.len();
-        let size = (self.grid.kp.n as u128) * (self.grid.kd.n as u128) * (self.grid.n_ki() as u128);
+        let size = self.grid.params.iter().fold(
+            (self.grid.kp.n as u128) * (self.grid.kd.n as u128) * (self.grid.n_ki() as u128),
+            |s, a| s.saturating_mul(a.n as u128),
+        );
         if size > MAX_POINTS as u128 {
             return Err(Error::input(
                 "grid",
@@ -83,10 +85,11 @@ impl SweepSettings {
                 ),
             ));
         }
-        debug_assert_eq!(n as u128, size);
+        debug_assert_eq!(self.grid.len() as u128, size);
         if self.grid.ki.is_some_and(|a| a.lo < 0.0) {
             return Err(Error::input("ki", "the integral gain must be ≥ 0"));
         }
+        check_param_axes(model, &self.grid.params)?;
         if !self.tilt.is_finite() {
             return Err(Error::input(
                 "tilt",
@@ -113,12 +116,66 @@ impl SweepSettings {
             source: model.source_label(),
             params: model.params.clone(),
             metric: self.metric,
-            grid: self.grid,
+            grid: self.grid.clone(),
             x0,
             controller: serde_json::to_value(&self.controller).unwrap_or_default(),
             settings: self.metric_settings,
         })
     }
+}
+
+/// Checks the parameter axes against the model: known names, each once, and every corner of
+/// the parameter box a valid vehicle (the checks of a parameter file are bounds, so the box is
+/// valid when its corners are).
+fn check_param_axes(model: &ResolvedModel, axes: &[crate::sweep::ParamAxis]) -> Result<()> {
+    for (k, a) in axes.iter().enumerate() {
+        if !model.ir.params().iter().any(|p| p.name == a.name) {
+            let known: Vec<&str> = model.ir.params().iter().map(|p| p.name.as_str()).collect();
+            return Err(Error::input(
+                "param",
+                format!(
+                    "`{}` is not a parameter of {} (known: {})",
+                    a.name,
+                    model.name(),
+                    known.join(", ")
+                ),
+            ));
+        }
+        if axes[..k].iter().any(|b| b.name == a.name) {
+            return Err(Error::input("param", format!("`{}` has two axes", a.name)));
+        }
+    }
+    for corner in 0..(1usize << axes.len().min(16)) {
+        let values: Vec<(String, f64)> = axes
+            .iter()
+            .enumerate()
+            .map(|(k, a)| {
+                (
+                    a.name.clone(),
+                    if corner >> k & 1 == 1 { a.hi } else { a.lo },
+                )
+            })
+            .collect();
+        model.with_param_values(&values, "the sweep's parameter axes")?;
+    }
+    Ok(())
+}
+
+/// The model at parameter setting `setting` of `grid` (the model itself without parameter
+/// axes).
+fn model_at<'a>(
+    model: &'a ResolvedModel,
+    grid: &Grid,
+    setting: usize,
+) -> Result<std::borrow::Cow<'a, ResolvedModel>> {
+    if grid.params.is_empty() {
+        return Ok(std::borrow::Cow::Borrowed(model));
+    }
+    let values = grid.param_values(setting);
+    Ok(std::borrow::Cow::Owned(model.with_param_values(
+        &values,
+        "the sweep's parameter axes",
+    )?))
 }
 
 /// The pitch loop at the upright (for the linear metric).
@@ -194,13 +251,18 @@ impl ControlTask for Chunk<'_> {
     }
 }
 
-/// Splits `range` into runs of equal controller-state count, each at most `size` long.
+/// Splits `range` into runs of equal controller-state count and parameter setting, each at
+/// most `size` long.
 fn chunks(grid: &Grid, range: Range<usize>, size: usize) -> Vec<(usize, Range<usize>)> {
     let nz = |i: usize| usize::from(grid.gains(i).ki != 0.0);
     let mut out: Vec<(usize, Range<usize>)> = Vec::new();
     for i in range {
         match out.last_mut() {
-            Some((z, r)) if *z == nz(i) && r.len() < size => r.end = i + 1,
+            Some((z, r))
+                if *z == nz(i) && grid.setting(r.start) == grid.setting(i) && r.len() < size =>
+            {
+                r.end = i + 1
+            }
             _ => out.push((nz(i), i..i + 1)),
         }
     }
@@ -244,8 +306,18 @@ fn compute_inner(
     let grid = &config.grid;
     let mut points: Vec<PointResult> = match config.metric {
         Metric::SpectralAbscissa => {
-            let pitch = dispatch(model, UprightPitch)?;
+            // One pitch loop per parameter setting, computed where its first point is.
             let indices: Vec<usize> = ranges.iter().cloned().flatten().collect();
+            let mut settings: Vec<usize> = indices.iter().map(|&i| grid.setting(i)).collect();
+            settings.dedup();
+            let loops: Vec<(usize, PitchLoop)> = settings
+                .into_par_iter()
+                .map(|k| Ok((k, dispatch(&*model_at(model, grid, k)?, UprightPitch)?)))
+                .collect::<Result<_>>()?;
+            let pitch_at = |k: usize| {
+                let at = loops.partition_point(|(s, _)| *s < k);
+                &loops[at].1
+            };
             indices
                 .par_chunks(4096)
                 .map(|part| {
@@ -254,7 +326,9 @@ fn compute_inner(
                     }
                     let p: Vec<PointResult> = part
                         .iter()
-                        .map(|&i| metric::spectral_abscissa(&pitch, i, &grid.gains(i)))
+                        .map(|&i| {
+                            metric::spectral_abscissa(pitch_at(grid.setting(i)), i, &grid.gains(i))
+                        })
                         .collect();
                     progress.advance(p.len() as u64);
                     p
@@ -284,12 +358,13 @@ fn compute_inner(
                         return Ok(None);
                     }
                     let n = indices.len() as u64;
+                    let at = model_at(model, grid, grid.setting(indices.start))?;
                     let task = Chunk {
                         config,
                         base,
                         indices,
                     };
-                    let p = dispatch_control(model, nz0 + nz, task)?;
+                    let p = dispatch_control(&at, nz0 + nz, task)?;
                     progress.advance(n);
                     Ok(Some(p))
                 })

@@ -258,6 +258,27 @@ impl ResolvedModel {
         })
     }
 
+    /// This model with parameters set by their IR names (`m2`, `I2_xx`: one value each),
+    /// checked like a parameter file's values; errors name the parameter.
+    pub fn with_param_values(&self, values: &[(String, f64)], origin: &str) -> Result<Self> {
+        let params = self.ir.params();
+        let mut out = self.params.clone();
+        for (name, v) in values {
+            let i = params
+                .iter()
+                .position(|p| p.name == *name)
+                .ok_or_else(|| Error::input("params", format!("unknown parameter `{name}`")))?;
+            out[i] = *v;
+        }
+        let label = format!("{origin} (over {})", self.params_origin);
+        twv_ir::check_values(&out, &label, params)?;
+        Ok(Self {
+            params: out,
+            params_origin: label,
+            ..self.clone()
+        })
+    }
+
     /// Whether the model runs on generated code.
     pub fn is_shipped(&self) -> bool {
         matches!(self.engine, Engine::Generated(_))

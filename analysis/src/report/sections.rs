@@ -207,6 +207,7 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
             n,
         },
         ki: None,
+        params: Vec::new(),
     };
     let map = sweep(
         &v8,
@@ -624,6 +625,7 @@ fn map_of(points: &[PointResult], n: usize) -> crate::sweep::Map {
             n,
         },
         ki: None,
+        params: Vec::new(),
     };
     crate::sweep::Map::in_memory("vehicle8", grid, Metric::SpectralAbscissa, points.to_vec())
 }

@@ -1,8 +1,11 @@
-//! The gain grid: axes `A:B:N`, and the row-major order that gives every point a fixed index.
+//! The grid: gain axes `A:B:N` and model-parameter axes `NAME=A:B:N`, and the row-major order
+//! that gives every point a fixed index.
 //!
-//! Order: Kp varies fastest, then Kd, then Ki —
-//! `index = (i_ki · N_kd + i_kd) · N_kp + i_kp`. One row of the map (fixed Kd, Ki) is therefore a
-//! contiguous index range, and a point's gains depend only on its index.
+//! Order: Kp varies fastest, then Kd, then Ki, then each parameter axis in the order given —
+//! `index = ((i_p · N_ki + i_ki) · N_kd + i_kd) · N_kp + i_kp` for one parameter axis. One row
+//! of the map (fixed Kd, Ki, parameters) is therefore a contiguous index range, the points of
+//! one parameter setting are a contiguous block, and a point's gains and parameters depend only
+//! on its index.
 
 use serde::{Deserialize, Serialize};
 
@@ -74,12 +77,64 @@ impl Axis {
     }
 }
 
-/// The (Kp, Kd[, Ki]) grid; without a Ki axis Ki = 0 (a PD law).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// A model parameter swept over `n` values from `lo` to `hi` (the IR's parameter name: `m2`,
+/// `I2_xx`, …).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParamAxis {
+    pub name: String,
+    pub lo: f64,
+    pub hi: f64,
+    pub n: usize,
+}
+
+impl ParamAxis {
+    /// Parses `NAME=A:B:N` (the option `--param`).
+    pub fn parse(text: &str) -> Result<Self, SweepError> {
+        let bad = |reason: &str| SweepError::Axis {
+            axis: "param",
+            text: text.to_string(),
+            reason: reason.to_string(),
+        };
+        let (name, axis) = text
+            .split_once('=')
+            .ok_or_else(|| bad("NAME=A:B:N (a parameter name, `=`, then the axis)"))?;
+        let name = name.trim();
+        if name.is_empty() {
+            return Err(bad("a parameter name before `=`"));
+        }
+        let a = Axis::parse("param", axis).map_err(|e| match e {
+            SweepError::Axis { reason, .. } => bad(&reason),
+            other => other,
+        })?;
+        Ok(Self {
+            name: name.to_string(),
+            lo: a.lo,
+            hi: a.hi,
+            n: a.n,
+        })
+    }
+
+    /// The values as an [`Axis`].
+    pub fn axis(&self) -> Axis {
+        Axis {
+            lo: self.lo,
+            hi: self.hi,
+            n: self.n,
+        }
+    }
+}
+
+/// The (Kp, Kd[, Ki]) grid, and the model parameters swept with it; without a Ki axis Ki = 0
+/// (a PD law). Gain-only grids serialise as before (no `params` field), so their shard files
+/// and hashes are unchanged.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Grid {
     pub kp: Axis,
     pub kd: Axis,
     pub ki: Option<Axis>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub params: Vec<ParamAxis>,
 }
 
 impl Grid {
@@ -93,9 +148,49 @@ impl Grid {
         self.kp.n * self.kd.n
     }
 
+    /// Number of points of one parameter setting (the gain grid).
+    pub fn gain_len(&self) -> usize {
+        self.map_len() * self.n_ki()
+    }
+
+    /// Number of parameter settings (1 without parameter axes).
+    pub fn n_settings(&self) -> usize {
+        self.params.iter().map(|a| a.n).product()
+    }
+
     /// Number of points.
     pub fn len(&self) -> usize {
-        self.map_len() * self.n_ki()
+        self.gain_len() * self.n_settings()
+    }
+
+    /// Which parameter setting a point belongs to (0 without parameter axes).
+    pub fn setting(&self, index: usize) -> usize {
+        index / self.gain_len()
+    }
+
+    /// (name, value) of every parameter axis at setting `k`, the first axis fastest.
+    pub fn param_values(&self, setting: usize) -> Vec<(String, f64)> {
+        let mut rest = setting;
+        self.params
+            .iter()
+            .map(|a| {
+                let i = rest % a.n;
+                rest /= a.n;
+                (a.name.clone(), a.axis().value(i))
+            })
+            .collect()
+    }
+
+    /// Every axis in index order (fastest first) with its label: Kp, Kd, Ki (if any), then the
+    /// parameters.
+    pub fn axes(&self) -> Vec<(String, Axis)> {
+        let mut out = vec![
+            ("Kp [N/rad]".to_string(), self.kp),
+            ("Kd [N s/rad]".to_string(), self.kd),
+        ];
+        out.extend(self.ki.map(|a| ("Ki [N/(rad s)]".to_string(), a)));
+        out.extend(self.params.iter().map(|p| (p.name.clone(), p.axis())));
+        out
     }
 
     /// Whether the grid is empty (never, for parsed axes).
@@ -105,6 +200,7 @@ impl Grid {
 
     /// (i_kp, i_kd, i_ki) of a point (see the module documentation for the order).
     pub fn coords(&self, index: usize) -> (usize, usize, usize) {
+        let index = index % self.gain_len();
         let i_kp = index % self.kp.n;
         let rest = index / self.kp.n;
         (i_kp, rest % self.kd.n, rest / self.kd.n)

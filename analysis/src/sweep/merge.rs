@@ -11,6 +11,7 @@ use serde::Serialize;
 use super::config::{Metric, SweepConfig};
 use super::error::{ranges, SweepError};
 use super::file::{shard_paths, ShardFile};
+use super::grid::Axis;
 use super::point::PointResult;
 use crate::output::Files;
 use crate::plot::{Figure, HeatMap};
@@ -128,22 +129,116 @@ pub fn collect(dir: &Path) -> Result<Map, SweepError> {
 }
 
 impl Map {
-    /// `index,kp,ki,kd,value,status`; an empty value where there is none.
+    /// `index,kp,ki,kd,[parameters,]value,status`; an empty value where there is none.
     pub fn csv(&self) -> String {
-        let mut s = String::from("index,kp,ki,kd,value,status\n");
+        let grid = &self.config.grid;
+        let mut s = String::from("index,kp,ki,kd,");
+        for a in &grid.params {
+            s += &format!("{},", a.name);
+        }
+        s += "value,status\n";
         for p in &self.points {
             let value = p.value.map(|v| v.to_string()).unwrap_or_default();
             let status = serde_json::to_value(p.status).expect("status serialises");
             let status = status.as_str().unwrap_or_default();
-            s += &format!("{},{},{},{},{value},{status}\n", p.index, p.kp, p.ki, p.kd);
+            s += &format!("{},{},{},{},", p.index, p.kp, p.ki, p.kd);
+            for (_, v) in grid.param_values(grid.setting(p.index)) {
+                s += &format!("{v},");
+            }
+            s += &format!("{value},{status}\n");
         }
         s
     }
 
+    /// One heat map over cells `(x, y)` of the points at `indices` (x fastest).
+    fn heat_map(
+        &self,
+        title: String,
+        (x, y): (&(String, Axis), &(String, Axis)),
+        indices: &[usize],
+    ) -> Figure {
+        let signed = self.config.metric != Metric::SettlingTime;
+        let points: Vec<&PointResult> = indices.iter().map(|&i| &self.points[i]).collect();
+        Figure::Heat(HeatMap {
+            title,
+            x_label: x.0.clone(),
+            y_label: y.0.clone(),
+            value_label: self.config.metric.label().into(),
+            xs: x.1.values(),
+            ys: y.1.values(),
+            values: points.iter().map(|p| p.value.unwrap_or(f64::NAN)).collect(),
+            missing: points
+                .iter()
+                .map(|p| p.value.is_none().then(|| p.status.label()))
+                .collect(),
+            boundary: points
+                .iter()
+                .map(|p| p.stability_indicator(signed))
+                .collect(),
+            signed,
+            size: (960, 700),
+        })
+    }
+
+    /// With parameter axes: heat maps over the first two axes that have more than one value
+    /// (in index order: Kp, Kd, Ki, the parameters), one per combination of the others —
+    /// `map.svg`, then `map-<k>.svg` — each titled with the values held fixed.
+    fn parameter_figures(&self) -> Vec<(String, Figure)> {
+        let axes = self.config.grid.axes();
+        let mut strides = vec![1usize; axes.len()];
+        for k in 1..axes.len() {
+            strides[k] = strides[k - 1] * axes[k - 1].1.n;
+        }
+        let mut plane: Vec<usize> = (0..axes.len()).filter(|&k| axes[k].1.n > 1).collect();
+        for k in 0..axes.len() {
+            if plane.len() < 2 && !plane.contains(&k) {
+                plane.push(k);
+            }
+        }
+        plane.truncate(2);
+        plane.sort_unstable();
+        let (px, py) = (plane[0], plane[1]);
+        let others: Vec<usize> = (0..axes.len()).filter(|k| !plane.contains(k)).collect();
+        let slices: usize = others.iter().map(|&k| axes[k].1.n).product();
+        (0..slices)
+            .map(|slice| {
+                let (mut rest, mut base, mut fixed) = (slice, 0, Vec::new());
+                for &k in &others {
+                    let i = rest % axes[k].1.n;
+                    rest /= axes[k].1.n;
+                    base += i * strides[k];
+                    fixed.push(format!("{} = {}", axes[k].0, axes[k].1.value(i)));
+                }
+                let (sx, sy) = (strides[px], strides[py]);
+                let nx = axes[px].1.n;
+                let indices: Vec<usize> = (0..axes[py].1.n)
+                    .flat_map(|j| (0..nx).map(move |i| base + i * sx + j * sy))
+                    .collect();
+                let title = format!(
+                    "{}: {}{}{}",
+                    self.config.model,
+                    self.config.metric.label(),
+                    if fixed.is_empty() { "" } else { ", " },
+                    fixed.join(", ")
+                );
+                let name = if slice == 0 {
+                    "map.svg".to_string()
+                } else {
+                    format!("map-{slice}.svg")
+                };
+                (name, self.heat_map(title, (&axes[px], &axes[py]), &indices))
+            })
+            .collect()
+    }
+
     /// Heat maps over (Kp, Kd), one per Ki value: `map.svg` for the first Ki (the only one
-    /// without a Ki axis), `map-ki-<k>.svg` for the k-th after it.
+    /// without a Ki axis), `map-ki-<k>.svg` for the k-th after it; with parameter axes see
+    /// `parameter_figures`.
     pub fn figures(&self) -> Vec<(String, Figure)> {
         let grid = &self.config.grid;
+        if !grid.params.is_empty() {
+            return self.parameter_figures();
+        }
         let signed = self.config.metric != Metric::SettlingTime;
         let (xs, ys) = (grid.kp.values(), grid.kd.values());
         let mut out = Vec::new();

@@ -298,6 +298,7 @@ fn sweep_in_memory_has_one_result_per_point() {
             n: 3,
         },
         ki: None,
+        params: Vec::new(),
     };
     let points = sweep(
         &shipped("vehicle8"),

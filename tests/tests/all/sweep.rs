@@ -34,6 +34,7 @@ fn grid(kp: &str, kd: &str) -> Grid {
         kp: Axis::parse("kp", kp).unwrap(),
         kd: Axis::parse("kd", kd).unwrap(),
         ki: None,
+        params: Vec::new(),
     }
 }
 
@@ -218,7 +219,7 @@ fn spectral_boundary_is_kp_equal_mx_g() {
     let p = |n: &str| model.param(n).unwrap();
     let kp_crit = (p("m1") + p("m2")) * p("g");
     let settings = spectral();
-    let grid = settings.grid;
+    let grid = settings.grid.clone();
     let points = sweep(&model, &settings, &Silent).unwrap();
     let spacing = grid.kp.spacing();
     let values: Vec<f64> = points.iter().map(|p| p.value.unwrap()).collect();
@@ -249,7 +250,7 @@ const SETPOINT_GAIN: f64 = 0.97;
 fn max_lyapunov_boundary_is_the_linear_boundary() {
     let model = vehicle8();
     let settings = SweepSettings::new(grid("0:4000:21", "0:2000:21"), Metric::MaxLyapunov);
-    let g = settings.grid;
+    let g = settings.grid.clone();
     let nonlinear = sweep(&model, &settings, &Silent).unwrap();
     let scaled = Grid {
         kp: Axis {
@@ -461,6 +462,7 @@ fn shards_tile_the_grid_in_row_major_order() {
         kp: Axis::parse("kp", "0:10:11").unwrap(),
         kd: Axis::parse("kd", "1:2:2").unwrap(),
         ki: Some(Axis::parse("ki", "0:1:3").unwrap()),
+        params: Vec::new(),
     };
     assert_eq!(grid.len(), 66);
     let g = grid.gains(11 * 2 + 11 + 4);
@@ -476,5 +478,120 @@ fn shards_tile_the_grid_in_row_major_order() {
     }
     for bad in ["0:1", "1:0:3", "0:1:0", "0:x:3"] {
         assert!(Axis::parse("kp", bad).is_err(), "{bad}");
+    }
+}
+
+fn param_axis(text: &str) -> twv_analysis::sweep::ParamAxis {
+    twv_analysis::sweep::ParamAxis::parse(text).unwrap()
+}
+
+/// A map over Kp and the pendulum mass m2: on every m2 row the spectral boundary sits at
+/// Kp = (m1 + m2)·g, so it moves with the parameter as the linear loop says.
+#[test]
+fn parameter_axes_move_the_boundary_with_the_parameter() {
+    let model = vehicle8();
+    let p = |n: &str| model.param(n).unwrap();
+    let mut grid = grid("0:2400:25", "1980:1980:1");
+    grid.params = vec![param_axis("m2=4:40:4")];
+    let settings = SweepSettings::new(grid.clone(), Metric::SpectralAbscissa);
+    let points = sweep(&model, &settings, &Silent).unwrap();
+    assert_eq!(points.len(), 25 * 4);
+    let mut crits = Vec::new();
+    for (k, row) in points.chunks(grid.kp.n).enumerate() {
+        let m2 = grid.param_values(k)[0].1;
+        let kp_crit = (p("m1") + m2) * p("g");
+        crits.push(kp_crit);
+        let i = row.iter().position(|q| q.value.unwrap() < 0.0).unwrap();
+        let (lo, hi) = (grid.kp.value(i - 1), grid.kp.value(i));
+        assert!(
+            lo < kp_crit && kp_crit <= hi,
+            "m2 = {m2}: {lo} < {kp_crit} ≤ {hi}"
+        );
+    }
+    // The rows differ: m2 from 4 to 40 kg moves the boundary by 36·g ≈ 353 N/rad.
+    assert!(crits[3] - crits[0] > 300.0);
+}
+
+/// A point of a parameter sweep is the point of the gain sweep on the model with those
+/// parameters, bit for bit (the lanes path included), and the map's CSV names the parameters.
+#[test]
+fn a_parameter_point_equals_the_gain_sweep_of_that_vehicle() {
+    let model = vehicle8();
+    let mut grid = grid("2000:4000:9", "1500:1500:1");
+    grid.params = vec![param_axis("m2=4:12:3"), param_axis("b=0.4:0.7:2")];
+    let settings = SweepSettings::new(grid.clone(), Metric::MaxLyapunov);
+    let points = sweep(&model, &settings, &Silent).unwrap();
+    assert_eq!(points.len(), 9 * 3 * 2);
+    for setting in [0, 5] {
+        let values = grid.param_values(setting);
+        let at = model.with_param_values(&values, "test").unwrap();
+        let mut gains_only = grid.clone();
+        gains_only.params.clear();
+        let direct = sweep(
+            &at,
+            &SweepSettings::new(gains_only, Metric::MaxLyapunov),
+            &Silent,
+        )
+        .unwrap();
+        let block = &points[setting * 9..(setting + 1) * 9];
+        for (a, b) in block.iter().zip(&direct) {
+            assert_eq!(
+                a.value.map(f64::to_bits),
+                b.value.map(f64::to_bits),
+                "{values:?}"
+            );
+            assert_eq!(a.status, b.status);
+        }
+    }
+    // Sharded and unsharded merge to the same bytes; the CSV has the parameter columns.
+    let mut grid = grid.clone();
+    grid.kd = Axis::parse("kd", "1000:2000:2").unwrap();
+    let settings = SweepSettings::new(grid, Metric::SpectralAbscissa);
+    let (whole, parts) = (scratch("param-whole"), scratch("param-parts"));
+    shard(&whole, &settings, "0/1");
+    merge(&whole).unwrap();
+    for i in 0..3 {
+        shard(&parts, &settings, &format!("{i}/3"));
+    }
+    merge(&parts).unwrap();
+    assert_eq!(outputs(&whole), outputs(&parts));
+    let csv = fs::read_to_string(whole.join("map.csv")).unwrap();
+    assert!(
+        csv.starts_with("index,kp,ki,kd,m2,b,value,status\n"),
+        "{csv}"
+    );
+    // Heat maps over (Kp, Kd), one per (m2, b) setting.
+    assert!(whole.join("map-5.svg").is_file() && !whole.join("map-6.svg").exists());
+    fs::remove_dir_all(&whole).unwrap();
+    fs::remove_dir_all(&parts).unwrap();
+}
+
+#[test]
+fn bad_parameter_axes_are_named() {
+    let model = vehicle8();
+    let err = |axes: &[&str]| {
+        let mut g = grid("0:100:2", "0:100:2");
+        g.params = axes.iter().map(|t| param_axis(t)).collect();
+        sweep(
+            &model,
+            &SweepSettings::new(g, Metric::SpectralAbscissa),
+            &Silent,
+        )
+        .unwrap_err()
+        .to_string()
+    };
+    let e = err(&["mass=1:2:2"]);
+    assert!(
+        e.contains("`mass` is not a parameter of vehicle8") && e.contains("m2"),
+        "{e}"
+    );
+    assert!(err(&["m2=1:2:2", "m2=3:4:2"]).contains("two axes"));
+    let e = err(&["m2=-1:5:3"]);
+    assert!(e.contains("m2"), "{e}");
+    for text in ["m2", "=1:2:3", "m2=1:2", "m2=2:1:3"] {
+        assert!(
+            twv_analysis::sweep::ParamAxis::parse(text).is_err(),
+            "{text}"
+        );
     }
 }

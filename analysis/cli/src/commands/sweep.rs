@@ -1,12 +1,13 @@
-//! `twv sweep`: one shard of a stability map over (Kp, Kd[, Ki]), for a cluster array job.
+//! `twv sweep`: one shard of a stability map over (Kp, Kd[, Ki]) and model parameters, for a
+//! cluster array job.
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use twv_analysis::api::{run_shard, status_counts, ShardOptions, ShardOutcome, SweepSettings};
-use twv_analysis::control::ControllerSettings;
-use twv_analysis::sweep::{Axis, Grid, Metric, MetricSettings, Shard};
+use twv_analysis::control::{ControllerSettings, STUDY_PD};
+use twv_analysis::sweep::{Axis, Grid, Metric, MetricSettings, ParamAxis, Shard};
 
 use crate::common::{parse_vector, Context, ControllerArgs, ModelArgs, Outcome};
 
@@ -32,21 +33,27 @@ impl From<MetricArg> for Metric {
     }
 }
 
-/// Map a metric over a grid of PID gains (one shard of it).
+/// Map a metric over a grid of PID gains and model parameters (one shard of it).
 #[derive(Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct SweepArgs {
     #[command(flatten)]
     pub model: ModelArgs,
-    /// Kp axis A:B:N (N values from A to B) [N/rad]
+    /// Kp axis A:B:N (N values from A to B) [N/rad] [default: 3860, the study's, with
+    /// --param axes; required without them]
     #[arg(long, value_name = "A:B:N", allow_hyphen_values = true)]
-    pub kp: String,
-    /// Kd axis C:D:M [N s/rad]
+    pub kp: Option<String>,
+    /// Kd axis C:D:M [N s/rad] [default: 1980, the study's, with --param axes; required
+    /// without them]
     #[arg(long, value_name = "C:D:M", allow_hyphen_values = true)]
-    pub kd: String,
+    pub kd: Option<String>,
     /// Ki axis E:F:L [N/(rad s)] [default: Ki = 0, a PD law]
     #[arg(long, value_name = "E:F:L", allow_hyphen_values = true)]
     pub ki: Option<String>,
+    /// A model parameter axis NAME=A:B:N (the IR's parameter names: m2, b, I2_xx, …);
+    /// repeatable, each varying slower than the gains and than the axes before it
+    #[arg(long = "param", value_name = "NAME=A:B:N", allow_hyphen_values = true)]
+    pub param_axes: Vec<String>,
     /// What to map
     #[arg(long, value_enum)]
     pub metric: MetricArg,
@@ -78,14 +85,32 @@ pub struct SweepArgs {
 
 impl SweepArgs {
     fn settings(&self) -> Result<SweepSettings> {
+        let params = self
+            .param_axes
+            .iter()
+            .map(|t| ParamAxis::parse(t))
+            .collect::<Result<Vec<_>, _>>()?;
+        // With parameter axes the gains may stay at the study's PD; without, they are the map.
+        let gain = |name: &'static str, given: &Option<String>, study: f64| -> Result<Axis> {
+            match given {
+                Some(text) => Ok(Axis::parse(name, text)?),
+                None if !params.is_empty() => Ok(Axis {
+                    lo: study,
+                    hi: study,
+                    n: 1,
+                }),
+                None => bail!("--{name} is required (or map over parameters with --param)"),
+            }
+        };
         let grid = Grid {
-            kp: Axis::parse("kp", &self.kp)?,
-            kd: Axis::parse("kd", &self.kd)?,
+            kp: gain("kp", &self.kp, STUDY_PD.kp)?,
+            kd: gain("kd", &self.kd, STUDY_PD.kd)?,
             ki: self
                 .ki
                 .as_deref()
                 .map(|t| Axis::parse("ki", t))
                 .transpose()?,
+            params,
         };
         let controller = if self.controller.any() {
             self.controller.settings(Default::default(), None)?
