@@ -21,8 +21,36 @@ pub struct Cli {
     /// No progress bars and no informational lines on stderr (errors are still printed)
     #[arg(long, global = true)]
     pub quiet: bool,
+    /// Use at most this instruction set for the generated kernels (what a CPU without the
+    /// better ones runs; for benchmarks): the results are the same bits [default: the best this
+    /// CPU has]
+    #[arg(long, global = true, value_enum, value_name = "ISA")]
+    pub isa: Option<IsaArg>,
     #[command(subcommand)]
     pub command: Command,
+}
+
+/// An instruction-set limit for `--isa`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum IsaArg {
+    /// The target's baseline (x86-64: SSE2)
+    Baseline,
+    /// AVX2 (the lanes kernel's 4-wide build)
+    Avx2,
+    /// AVX-512F/VL
+    Avx512,
+}
+
+impl IsaArg {
+    /// The kernels' instruction set.
+    pub fn isa(self) -> twv_kernels::isa::Isa {
+        use twv_kernels::isa::Isa;
+        match self {
+            IsaArg::Baseline => Isa::Baseline,
+            IsaArg::Avx2 => Isa::Avx2,
+            IsaArg::Avx512 => Isa::Avx512,
+        }
+    }
 }
 
 /// The jobs.

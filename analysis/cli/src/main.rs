@@ -27,6 +27,9 @@ const SEGWAY_TOML: &str = include_str!("../../../vehicles/segway.toml");
 fn main() -> ExitCode {
     restore_default_sigpipe();
     let cli = Cli::parse();
+    if let Some(limit) = cli.isa {
+        twv_kernels::isa::force(limit.isa());
+    }
     let ctx = Context::new(PAPER_TOML, SEGWAY_TOML, cli.quiet);
     common::install_interrupt_handler();
     match commands::run(&cli.command, &ctx) {

@@ -572,7 +572,10 @@ fn sweep_over_model_parameters() {
     let mut lines = csv.lines();
     assert_eq!(lines.next(), Some("index,kp,ki,kd,m2,b,value,status"));
     // Row 4: m2 = 12 (the second m2), b = 0.2 + 0.8/2 (the second b, as computed), the PD.
-    assert!(lines.nth(4).unwrap().starts_with("4,3860,0,1980,12,0.6000000000000001,"));
+    assert!(lines
+        .nth(4)
+        .unwrap()
+        .starts_with("4,3860,0,1980,12,0.6000000000000001,"));
     let svg = std::fs::read_to_string(out.join("map.svg")).unwrap();
     assert!(
         svg.contains("\nm2\n") && svg.contains("\nb\n"),

@@ -50,7 +50,10 @@ pub fn lets(f: &Function, params: &Params) -> TokenStream {
     quote!(#(#lets)*)
 }
 
-/// The `let`s of `f` over lane arrays (`twv_kernels::lanes`): each instruction's scalar expression
+/// The `let`s of `f` over lane arrays (`twv_kernels::lanes`), calling the lane operations as
+/// `wide::…`: the kernel brings the module of its instruction set into scope under that name
+/// (`lanes::wide` for AVX-512, `lanes::wide_avx2`), so one body serves every build.
+/// Each instruction's scalar expression
 /// written out for every lane, states and inputs read from the gathered lane arrays `xs`, `us`.
 /// Per lane these are the operations of [`lets`], in the same order.
 pub fn lane_lets(f: &Function, params: &Params) -> TokenStream {
@@ -63,7 +66,7 @@ pub fn lane_lets(f: &Function, params: &Params) -> TokenStream {
             let sc = format_ident!("sc{}", x);
             let pair = if sin_cos_done.insert(x) {
                 let x = value(x);
-                quote!(let #sc = ::twv_kernels::lanes::wide::sin_cos(#x);)
+                quote!(let #sc = wide::sin_cos(#x);)
             } else {
                 TokenStream::new()
             };
@@ -97,10 +100,10 @@ pub fn lane_lets(f: &Function, params: &Params) -> TokenStream {
             Instr::Binary(op, x, y) => {
                 let (e, x, y) = (binary(op, &a, &b), value(x), value(y));
                 match op {
-                    BinaryOp::Add => quote!(::twv_kernels::lanes::wide::add(#x, #y)),
-                    BinaryOp::Sub => quote!(::twv_kernels::lanes::wide::sub(#x, #y)),
-                    BinaryOp::Mul => quote!(::twv_kernels::lanes::wide::mul(#x, #y)),
-                    BinaryOp::Div => quote!(::twv_kernels::lanes::wide::div(#x, #y)),
+                    BinaryOp::Add => quote!(wide::add(#x, #y)),
+                    BinaryOp::Sub => quote!(wide::sub(#x, #y)),
+                    BinaryOp::Mul => quote!(wide::mul(#x, #y)),
+                    BinaryOp::Div => quote!(wide::div(#x, #y)),
                     _ => quote!(::twv_kernels::lanewise!(|#a, #b| #e; #x, #y)),
                 }
             }
@@ -261,10 +264,10 @@ pub fn lane_jw_rows(jac: &Output) -> TokenStream {
                 None => lane_zero(),
             };
             let c = index(*c);
-            quote!(::twv_kernels::lanes::wide::mul(#entry, wl[#c]))
+            quote!(wide::mul(#entry, wl[#c]))
         });
         terms
-            .reduce(|acc, t| quote!(::twv_kernels::lanes::wide::add(#acc, #t)))
+            .reduce(|acc, t| quote!(wide::add(#acc, #t)))
             .unwrap_or_else(lane_zero)
     });
     quote!([#(#rows),*])

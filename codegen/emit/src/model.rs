@@ -380,25 +380,49 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
         jac_u_lanes: &mut [[[f64; #nu]; #nx]; ::twv_kernels::lanes::LANES]
     );
     let args = quote!(x_lanes, u_lanes, w_lanes, f_lanes, out_lanes, jac_u_lanes);
-    // Unlike the one-point kernels this body is not built twice: its + − × ÷ are AVX-512
-    // intrinsics (the vectoriser leaves the per-lane form scalar), so without AVX-512 the lanes
-    // go one by one through the one-point kernel, which has the same bits.
+    // The body's + − × ÷ and sincos are intrinsics on lane arrays (the vectoriser leaves the
+    // per-lane form scalar): built for AVX-512 (one 8-wide register per lane array) and for AVX2
+    // (two 4-wide ones), the same operations in the same order. Without either the lanes go one
+    // by one through the one-point kernel, which has the same bits.
+    let body = |module: TokenStream| {
+        quote! {
+            use #module as wide;
+            let xs = ::twv_kernels::lanes::gather(x_lanes);
+            let us = ::twv_kernels::lanes::gather(u_lanes);
+            #fj_body
+            ::twv_kernels::lanes::scatter(&#fj_f, f_lanes);
+            let wl = ::twv_kernels::lanes::gather(w_lanes);
+            ::twv_kernels::lanes::scatter(&#jw, out_lanes);
+            {
+                #ju_body
+                ::twv_kernels::lanes::scatter_matrix(&#ju_out, jac_u_lanes);
+            }
+        }
+    };
+    let avx512 = body(quote!(::twv_kernels::lanes::wide));
+    let avx2 = body(quote!(::twv_kernels::lanes::wide_avx2));
     Ok(quote! {
         /// [`Self::kernel_variational`] with one tangent vector and ∂f/∂u at `LANES` points
-        /// (`x_lanes[l]`, … → `f_lanes[l]`, …): one AVX-512 instruction stream for all lanes
-        /// where the CPU has it, else one point after the other. Every lane has the bits of the
-        /// one-point kernel.
+        /// (`x_lanes[l]`, … → `f_lanes[l]`, …): one AVX-512 (or AVX2) instruction stream for all
+        /// lanes where the CPU has it, else one point after the other. Every lane has the bits
+        /// of the one-point kernel.
         pub fn kernel_variational_lanes(&self, #params) {
             #[cfg(target_arch = "x86_64")]
-            if ::twv_kernels::isa::avx512() {
-                // SAFETY: `avx512()` is true only when the CPU and the OS support AVX-512F and
-                // AVX-512VL, the features this build was compiled for.
-                return unsafe { self.kernel_variational_lanes_avx512(#args) };
+            {
+                if ::twv_kernels::isa::avx512() {
+                    // SAFETY: `avx512()` is true only when the CPU and the OS support AVX-512F
+                    // and AVX-512VL, the features this build was compiled for.
+                    return unsafe { self.kernel_variational_lanes_avx512(#args) };
+                }
+                if ::twv_kernels::isa::avx2() {
+                    // SAFETY: `avx2()` is true only when the CPU and the OS support AVX2.
+                    return unsafe { self.kernel_variational_lanes_avx2(#args) };
+                }
             }
             self.kernel_variational_lanes_baseline(#args)
         }
         /// [`Self::kernel_variational_lanes`] one lane after the other through the one-point
-        /// kernel: what runs where AVX-512 is missing (public so tests can compare).
+        /// kernel: what runs where neither AVX-512 nor AVX2 is (public so tests can compare).
         pub fn kernel_variational_lanes_baseline(&self, #params) {
             for l in 0..::twv_kernels::lanes::LANES {
                 self.kernel_variational(
@@ -414,16 +438,12 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx512f,avx512vl")]
         unsafe fn kernel_variational_lanes_avx512(&self, #params) {
-            let xs = ::twv_kernels::lanes::gather(x_lanes);
-            let us = ::twv_kernels::lanes::gather(u_lanes);
-            #fj_body
-            ::twv_kernels::lanes::scatter(&#fj_f, f_lanes);
-            let wl = ::twv_kernels::lanes::gather(w_lanes);
-            ::twv_kernels::lanes::scatter(&#jw, out_lanes);
-            {
-                #ju_body
-                ::twv_kernels::lanes::scatter_matrix(&#ju_out, jac_u_lanes);
-            }
+            #avx512
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        unsafe fn kernel_variational_lanes_avx2(&self, #params) {
+            #avx2
         }
     })
 }

@@ -3,69 +3,164 @@
 //! The kernels are long straight-line scalar code. Built for the x86-64 baseline they have 16
 //! vector registers and spill; built for AVX-512 they have 32, and the columns of a J·W product
 //! become single 8-wide operations. The generated code therefore compiles every kernel twice and
-//! picks the AVX-512 build when [`avx512`] says the CPU (and the OS) support it. Rust never fuses
-//! a multiplication and an addition on its own, so both builds perform the same IEEE operations
-//! in the same order and give the same bits (tested): the choice changes speed, never results.
+//! picks the AVX-512 build when [`avx512`] says the CPU (and the OS) support it. The lanes
+//! kernel (eight points in one instruction stream, the maps) has a third build for AVX2, two
+//! 4-wide registers per lane array, for CPUs without AVX-512 ([`avx2`]). Rust never fuses a
+//! multiplication and an addition on its own, so every build performs the same IEEE operations
+//! in the same order and gives the same bits (tested): the choice changes speed, never results.
 
 use core::sync::atomic::{AtomicU8, Ordering};
 
+/// The instruction sets kernels are built for, in increasing order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Isa {
+    /// The target's baseline (x86-64: SSE2).
+    Baseline,
+    /// AVX2 (the lanes kernel's 4-wide build).
+    Avx2,
+    /// AVX-512F and AVX-512VL.
+    Avx512,
+}
+
+impl Isa {
+    /// How logs and benchmarks name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Isa::Baseline => "baseline",
+            Isa::Avx2 => "AVX2",
+            Isa::Avx512 => "AVX-512",
+        }
+    }
+
+    fn code(self) -> u8 {
+        match self {
+            Isa::Baseline => 1,
+            Isa::Avx2 => 2,
+            Isa::Avx512 => 3,
+        }
+    }
+}
+
 const UNKNOWN: u8 = 0;
-const BASELINE: u8 = 1;
-const AVX512: u8 = 2;
 
 static CHOICE: AtomicU8 = AtomicU8::new(UNKNOWN);
 
-/// Whether the generated kernels use their AVX-512 build (AVX-512F and AVX-512VL present and
-/// enabled by the OS, and not switched off with [`force_baseline`]). One relaxed atomic load
-/// after the first call; never allocates.
+/// The instruction set the kernels use now: the best the CPU supports, unless lowered with
+/// [`force`]. One relaxed atomic load after the first call; never allocates.
 #[inline]
-pub fn avx512() -> bool {
+pub fn current() -> Isa {
     match CHOICE.load(Ordering::Relaxed) {
-        AVX512 => true,
-        BASELINE => false,
+        1 => Isa::Baseline,
+        2 => Isa::Avx2,
+        3 => Isa::Avx512,
         _ => detect(),
     }
 }
 
-/// Makes every later kernel call use the baseline build (or, with `false`, the best build the
-/// CPU supports again): for benchmarks that show what the AVX-512 build is worth. Results do
-/// not change.
-pub fn force_baseline(baseline: bool) {
-    let choice = if !baseline && cpu_has_avx512() {
-        AVX512
+/// Whether the generated kernels use their AVX-512 build (AVX-512F and AVX-512VL present and
+/// enabled by the OS, and not switched off with [`force`]).
+#[inline]
+pub fn avx512() -> bool {
+    current() == Isa::Avx512
+}
+
+/// Whether the lanes kernel may use its AVX2 build (AVX2 present and enabled by the OS; every
+/// AVX-512 CPU has it), unless lowered with [`force`].
+#[inline]
+pub fn avx2() -> bool {
+    current() >= Isa::Avx2
+}
+
+/// The best instruction set this CPU and OS support.
+pub fn best() -> Isa {
+    if cpu_has_avx512() {
+        Isa::Avx512
+    } else if cpu_has_avx2() {
+        Isa::Avx2
     } else {
-        BASELINE
-    };
-    CHOICE.store(choice, Ordering::Relaxed);
+        Isa::Baseline
+    }
+}
+
+/// Makes every later kernel call use at most `limit` (the CPU's best if that is lower), and
+/// returns what is used: for benchmarks and tests that show each build on one machine, e.g. an
+/// AVX-512 CPU running what an AVX2-only CPU runs. Results do not change.
+pub fn force(limit: Isa) -> Isa {
+    let isa = best().min(limit);
+    CHOICE.store(isa.code(), Ordering::Relaxed);
+    isa
+}
+
+/// [`force`] to the baseline (`true`) or back to the best build (`false`).
+pub fn force_baseline(baseline: bool) {
+    force(if baseline { Isa::Baseline } else { Isa::Avx512 });
 }
 
 #[cold]
-fn detect() -> bool {
-    let on = cpu_has_avx512();
-    CHOICE.store(if on { AVX512 } else { BASELINE }, Ordering::Relaxed);
-    on
+fn detect() -> Isa {
+    let isa = best();
+    CHOICE.store(isa.code(), Ordering::Relaxed);
+    isa
+}
+
+#[cfg(target_arch = "x86_64")]
+mod cpuid {
+    use core::arch::x86_64::{__cpuid, __cpuid_count, _xgetbv};
+    const OSXSAVE: u32 = 1 << 27;
+
+    /// XCR0 (the register states the OS saves), if the OS has enabled XGETBV.
+    pub fn xcr0() -> Option<u64> {
+        if __cpuid(0).eax < 7 || __cpuid(1).ecx & OSXSAVE == 0 {
+            return None;
+        }
+        // SAFETY: OSXSAVE is set, so the OS has enabled XGETBV.
+        Some(unsafe { _xgetbv(0) })
+    }
+
+    /// EBX of CPUID leaf 7 (structured extended features).
+    pub fn leaf7_ebx() -> u32 {
+        __cpuid_count(7, 0).ebx
+    }
+
+    /// ECX of CPUID leaf 1.
+    pub fn leaf1_ecx() -> u32 {
+        __cpuid(1).ecx
+    }
 }
 
 /// AVX-512F and AVX-512VL in CPUID, and the opmask and all ZMM register states enabled in XCR0
 /// (what `std::is_x86_feature_detected!` checks; this crate is `no_std`).
 #[cfg(target_arch = "x86_64")]
 fn cpu_has_avx512() -> bool {
-    use core::arch::x86_64::{__cpuid, __cpuid_count, _xgetbv};
-    const OSXSAVE: u32 = 1 << 27;
     // XCR0: SSE, AVX, opmask, upper halves of ZMM0-15, ZMM16-31.
     const ZMM_STATE: u64 = 0b1110_0110;
     const AVX512F: u32 = 1 << 16;
     const AVX512VL: u32 = 1 << 31;
-    if __cpuid(0).eax < 7 || __cpuid(1).ecx & OSXSAVE == 0 {
+    let Some(xcr0) = cpuid::xcr0() else {
         return false;
-    }
-    // SAFETY: OSXSAVE is set, so the OS has enabled XGETBV.
-    let xcr0 = unsafe { _xgetbv(0) };
-    let ebx = __cpuid_count(7, 0).ebx;
+    };
+    let ebx = cpuid::leaf7_ebx();
     xcr0 & ZMM_STATE == ZMM_STATE && ebx & AVX512F != 0 && ebx & AVX512VL != 0
+}
+
+/// AVX and AVX2 in CPUID, and the SSE and YMM register states enabled in XCR0.
+#[cfg(target_arch = "x86_64")]
+fn cpu_has_avx2() -> bool {
+    const YMM_STATE: u64 = 0b110;
+    const AVX: u32 = 1 << 28;
+    const AVX2: u32 = 1 << 5;
+    let Some(xcr0) = cpuid::xcr0() else {
+        return false;
+    };
+    xcr0 & YMM_STATE == YMM_STATE && cpuid::leaf1_ecx() & AVX != 0 && cpuid::leaf7_ebx() & AVX2 != 0
 }
 
 #[cfg(not(target_arch = "x86_64"))]
 fn cpu_has_avx512() -> bool {
+    false
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn cpu_has_avx2() -> bool {
     false
 }

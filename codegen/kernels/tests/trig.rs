@@ -114,56 +114,77 @@ fn symmetries_hold_exactly() {
     }
 }
 
-#[test]
-fn eight_wide_sin_cos_has_the_bits_of_the_scalar_one() {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use twv_kernels::lanes::{wide, LANES};
-        if !twv_kernels::isa::avx512() {
-            eprintln!("note: no AVX-512F/VL on this CPU, the 8-wide sincos cannot run here");
-            return;
+/// The arguments that reach every path of the scalar function: tiny, |x| ≤ π/4 (no
+/// reduction), one-, two- and three-round reductions (next to k·π/2), both signs, the
+/// thresholds' neighbours.
+#[cfg(target_arch = "x86_64")]
+fn every_path() -> Vec<f64> {
+    let mut xs = vec![0.0, -0.0, 5e-324, -1e-300, 1e-9, -3.7e-9];
+    let mut rng = Uniform(0x5eed);
+    for r in [1e-7, 0.5, 0.785, 0.8, 2.0, 40.0, 1e3, 1.6e6] {
+        xs.extend((0..3000).map(|_| rng.next(-r, r)));
+    }
+    for k in 1..1500_i32 {
+        let centre = f64::from(k) * core::f64::consts::FRAC_PI_2;
+        for d in 0..3 {
+            xs.push(f64::from_bits(centre.to_bits() + d));
+            xs.push(-f64::from_bits(centre.to_bits() - d));
         }
-        // Every path of the scalar function: tiny, |x| ≤ π/4 (no reduction), one-, two- and
-        // three-round reductions (next to k·π/2), both signs, the thresholds' neighbours.
-        let mut xs = vec![0.0, -0.0, 5e-324, -1e-300, 1e-9, -3.7e-9];
-        let mut rng = Uniform(0x5eed);
-        for r in [1e-7, 0.5, 0.785, 0.8, 2.0, 40.0, 1e3, 1.6e6] {
-            xs.extend((0..3000).map(|_| rng.next(-r, r)));
+    }
+    for threshold in [0x3FE9_21FB_u64 << 32, 0x3E40_0000_u64 << 32] {
+        for d in 0..4 {
+            xs.push(f64::from_bits(threshold + d));
+            xs.push(-f64::from_bits(threshold - d - 1));
         }
-        for k in 1..1500_i32 {
-            let centre = f64::from(k) * core::f64::consts::FRAC_PI_2;
-            for d in 0..3 {
-                xs.push(f64::from_bits(centre.to_bits() + d));
-                xs.push(-f64::from_bits(centre.to_bits() - d));
-            }
-        }
-        for threshold in [0x3FE9_21FB_u64 << 32, 0x3E40_0000_u64 << 32] {
-            for d in 0..4 {
-                xs.push(f64::from_bits(threshold + d));
-                xs.push(-f64::from_bits(threshold - d - 1));
-            }
-        }
-        // Mixed lanes: consecutive groups take values from all over the list.
-        let n = xs.len() / LANES * LANES;
-        let stride = n / LANES;
-        for g in 0..stride {
-            let x: [f64; LANES] = core::array::from_fn(|l| xs[g + l * stride]);
-            // SAFETY: the CPU has AVX-512F and VL (checked above).
-            let (s, c) = unsafe { wide::sin_cos(x) };
-            for l in 0..LANES {
-                let (s1, c1) = sin_cos(x[l]);
-                assert_eq!(s[l].to_bits(), s1.to_bits(), "sin({:e})", x[l]);
-                assert_eq!(c[l].to_bits(), c1.to_bits(), "cos({:e})", x[l]);
-            }
-        }
-        // A lane that needs the C library sends the group lane by lane.
-        let x = [0.3, 1e7, f64::NAN, -2.0, 0.0, 1e-12, 3.0, f64::INFINITY];
-        // SAFETY: as above.
-        let (s, c) = unsafe { wide::sin_cos(x) };
+    }
+    xs
+}
+
+/// `wide_sin_cos` (an 8-lane sincos) against the scalar one at every argument of
+/// [`every_path`], lanes mixed from all over the list, and a group with a lane for the C
+/// library.
+#[cfg(target_arch = "x86_64")]
+fn lanes_have_the_scalar_bits(wide_sin_cos: impl Fn([f64; 8]) -> ([f64; 8], [f64; 8])) {
+    use twv_kernels::lanes::LANES;
+    let xs = every_path();
+    let n = xs.len() / LANES * LANES;
+    let stride = n / LANES;
+    for g in 0..stride {
+        let x: [f64; LANES] = core::array::from_fn(|l| xs[g + l * stride]);
+        let (s, c) = wide_sin_cos(x);
         for l in 0..LANES {
             let (s1, c1) = sin_cos(x[l]);
-            assert!(s[l].to_bits() == s1.to_bits() || (s[l].is_nan() && s1.is_nan()));
-            assert!(c[l].to_bits() == c1.to_bits() || (c[l].is_nan() && c1.is_nan()));
+            assert_eq!(s[l].to_bits(), s1.to_bits(), "sin({:e})", x[l]);
+            assert_eq!(c[l].to_bits(), c1.to_bits(), "cos({:e})", x[l]);
+        }
+    }
+    // A lane that needs the C library sends the group lane by lane.
+    let x = [0.3, 1e7, f64::NAN, -2.0, 0.0, 1e-12, 3.0, f64::INFINITY];
+    let (s, c) = wide_sin_cos(x);
+    for l in 0..LANES {
+        let (s1, c1) = sin_cos(x[l]);
+        assert!(s[l].to_bits() == s1.to_bits() || (s[l].is_nan() && s1.is_nan()));
+        assert!(c[l].to_bits() == c1.to_bits() || (c[l].is_nan() && c1.is_nan()));
+    }
+}
+
+#[test]
+fn eight_wide_sin_cos_has_the_bits_of_the_scalar_one_on_every_isa_here() {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use twv_kernels::isa::{best, Isa};
+        use twv_kernels::lanes::{wide, wide_avx2};
+        if best() >= Isa::Avx512 {
+            // SAFETY: the CPU has AVX-512F and VL.
+            lanes_have_the_scalar_bits(|x| unsafe { wide::sin_cos(x) });
+        } else {
+            eprintln!("SKIPPED: the AVX-512 sincos did not run: this CPU has no AVX-512F/VL");
+        }
+        if best() >= Isa::Avx2 {
+            // SAFETY: the CPU has AVX2.
+            lanes_have_the_scalar_bits(|x| unsafe { wide_avx2::sin_cos(x) });
+        } else {
+            eprintln!("SKIPPED: the AVX2 sincos did not run: this CPU has no AVX2");
         }
     }
 }

@@ -179,25 +179,42 @@ fn main() -> ExitCode {
         black_box((&mut f, &mut out, &mut ju));
     });
     const L: usize = twv_kernels::lanes::LANES;
-    let lanes = time(plan, || {
-        let (x, u, w) = ([pt.x; L], [pt.u; L], [pt.w[0]; L]);
-        let (mut f, mut out, mut ju) = ([[0.0; NX]; L], [[0.0; NX]; L], [[[0.0; 2]; NX]; L]);
-        black_box(&runtime).f_jw_jac_u_lanes(
-            black_box(&x),
-            black_box(&u),
-            black_box(&w),
-            &mut f,
-            &mut out,
-            &mut ju,
-        );
-        black_box((&mut f, &mut out, &mut ju));
-    });
+    let lanes = || {
+        time(plan, || {
+            let (x, u, w) = ([pt.x; L], [pt.u; L], [pt.w[0]; L]);
+            let (mut f, mut out, mut ju) = ([[0.0; NX]; L], [[0.0; NX]; L], [[[0.0; 2]; NX]; L]);
+            black_box(&runtime).f_jw_jac_u_lanes(
+                black_box(&x),
+                black_box(&u),
+                black_box(&w),
+                &mut f,
+                &mut out,
+                &mut ju,
+            );
+            black_box((&mut f, &mut out, &mut ju));
+        })
+    };
     println!();
     println!(
-        "closed-loop stage kernel (f, J·w for one w, ∂f/∂u): one point per call {one} ns, \
-         {L} lanes per call {lanes} ns ({:.1} ns per point)",
-        lanes.median / L as f64
+        "closed-loop stage kernel (f, J·w for one w, ∂f/∂u): one point per call {one} ns; \
+         {L} lanes per call, each build this CPU can run:"
     );
+    use twv_kernels::isa::{best, force, Isa};
+    for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
+        if best() < isa {
+            println!("  {}: not run (this CPU lacks it)", isa.name());
+            continue;
+        }
+        force(isa);
+        let t = lanes();
+        println!(
+            "  {}: {t} ns ({:.1} ns per point, {:.2}× one point per call)",
+            isa.name(),
+            t.median / L as f64,
+            one.median * L as f64 / t.median
+        );
+    }
+    force(Isa::Avx512);
 
     // The Lyapunov floor: an RK4 stage cannot start before the previous stage's f is known, so
     // the study preset (10 s at h = 1e-3: 40 000 stages) costs at least 40 000 times the

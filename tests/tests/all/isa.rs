@@ -1,5 +1,5 @@
-//! Every generated kernel is built twice — for the x86-64 baseline and for AVX-512 — and
-//! `twv_kernels::isa` picks one at run time. Rust never fuses a multiplication and an addition on
+//! Every generated kernel is built twice — for the x86-64 baseline and for AVX-512 — (the lanes
+//! kernel also for AVX2) and `twv_kernels::isa` picks one at run time. Rust never fuses a multiplication and an addition on
 //! its own, so the two builds must give the same bits: checked here for every kernel of every
 //! shipped model, runtime and baked, at random points (angles beyond the inline sin/cos range
 //! included, so its C-library branch runs in both builds).
@@ -69,12 +69,12 @@ macro_rules! both_builds_agree {
                 assert_bits(&[ta], &[tb], &format!("{tag} trace"));
             }
         }
-        lanes_agree_with_one_point!(m, $nx, $nu, what);
     }};
 }
 
-/// Every lane of the lanes kernel (both builds) against the one-point kernel at that lane's
-/// point, K = 1 with ∂f/∂u, at 100 random batches of 8 points.
+/// Every lane of the lanes kernel, in the build of the instruction set in force, against the
+/// one-point kernel at that lane's point (and the baseline lanes), K = 1 with ∂f/∂u, at 100
+/// random batches of 8 points.
 macro_rules! lanes_agree_with_one_point {
     ($m:expr, $nx:literal, $nu:literal, $what:expr) => {{
         use twv_kernels::lanes::LANES;
@@ -114,6 +114,37 @@ macro_rules! lanes_agree_with_one_point {
     }};
 }
 
+/// The lanes kernel of every shipped model, runtime and baked, in each build this CPU can run
+/// (AVX-512, AVX2, one point at a time), has the one-point kernel's bits in every lane; the
+/// builds it cannot run are named as not run.
+#[test]
+fn lanes_builds_have_the_one_point_bits_on_every_isa_here() {
+    use twv_kernels::isa::{best, force, Isa};
+    for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
+        if best() < isa {
+            eprintln!(
+                "SKIPPED: the {} lanes build did not run: this CPU lacks {}",
+                isa.name(),
+                isa.name()
+            );
+            continue;
+        }
+        assert_eq!(force(isa), isa);
+        let what = |m: &str| format!("{m} ({})", isa.name());
+        lanes_agree_with_one_point!(Vehicle8::with_defaults(), 8, 2, what("vehicle8"));
+        lanes_agree_with_one_point!(baked::Vehicle8, 8, 2, what("baked vehicle8"));
+        lanes_agree_with_one_point!(Vehicle7::with_defaults(), 7, 2, what("vehicle7"));
+        lanes_agree_with_one_point!(baked::Vehicle7, 7, 2, what("baked vehicle7"));
+        lanes_agree_with_one_point!(Segway7::with_defaults(), 7, 2, what("segway7"));
+        lanes_agree_with_one_point!(baked::Segway7, 7, 2, what("baked segway7"));
+        lanes_agree_with_one_point!(Lorenz::with_defaults(), 3, 0, what("lorenz"));
+        lanes_agree_with_one_point!(baked::Lorenz, 3, 0, what("baked lorenz"));
+        lanes_agree_with_one_point!(HenonHeiles::with_defaults(), 4, 0, what("henon_heiles"));
+        lanes_agree_with_one_point!(baked::HenonHeiles, 4, 0, what("baked henon_heiles"));
+    }
+    force(Isa::Avx512);
+}
+
 #[test]
 fn avx512_and_baseline_builds_agree_bit_for_bit() {
     isa_detection_matches_std_and_can_be_forced();
@@ -138,8 +169,8 @@ fn avx512_and_baseline_builds_agree_bit_for_bit() {
     both_builds_agree!(baked::HenonHeiles, 4, 0, "baked henon_heiles");
 }
 
-/// The hand-written CPUID/XGETBV check (the model crate is `no_std`) says what std's says, and
-/// `force_baseline` switches the choice both ways. Called at the start of the test above rather
+/// The hand-written CPUID/XGETBV check (the model crate is `no_std`) says what std's says, for
+/// AVX-512 and AVX2, and `force_baseline` switches the choice both ways. Called at the start of the test above rather
 /// than as a test of its own: a parallel test forcing the baseline would let the comparison
 /// above run the baseline build twice.
 fn isa_detection_matches_std_and_can_be_forced() {
@@ -147,6 +178,7 @@ fn isa_detection_matches_std_and_can_be_forced() {
     {
         let std_says = is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl");
         assert_eq!(twv_kernels::isa::avx512(), std_says);
+        assert_eq!(twv_kernels::isa::avx2(), is_x86_feature_detected!("avx2"));
         twv_kernels::isa::force_baseline(true);
         assert!(!twv_kernels::isa::avx512());
         twv_kernels::isa::force_baseline(false);

@@ -1,7 +1,7 @@
 //! The sweep's eight-at-a-time max-Lyapunov metric (`max_lyapunov_lanes`, lanes kernel) gives
 //! every point exactly the bits and status of the one-point metric (`metric::max_lyapunov`),
 //! whatever mix of outcomes shares a group, for PD, PID with saturation and every controller
-//! part, with the AVX-512 lanes kernel and with its one-lane-at-a-time fallback.
+//! part, with the AVX-512 and AVX2 lanes kernels and with the one-lane-at-a-time fallback.
 
 use twv_analysis::control::{
     AntiWindup, ControllerSettings, PidLoop, PitchPid, Plant, Profile, Setpoint, VelocityLoop,
@@ -64,11 +64,13 @@ fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> V
     let one: Vec<PointResult> = (0..LANES)
         .map(|l| metric::max_lyapunov(&loops[l], &x0, &s, indices[l]))
         .collect();
-    for baseline in [false, true] {
-        twv_kernels::isa::force_baseline(baseline);
+    use twv_kernels::isa::{force, Isa};
+    // Each build this CPU can run (a lower one is what `force` falls back to otherwise).
+    for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
+        let used = force(isa);
         let lanes = max_lyapunov_lanes(&loops, &x0, &s, indices);
         for (a, b) in lanes.iter().zip(&one) {
-            let tag = format!("{what} (baseline kernel: {baseline}) point {}", b.index);
+            let tag = format!("{what} ({} kernel) point {}", used.name(), b.index);
             assert_eq!(a.index, b.index, "{tag}");
             assert_eq!((a.kp, a.ki, a.kd), (b.kp, b.ki, b.kd), "{tag}");
             assert_eq!(a.status, b.status, "{tag}");
@@ -81,7 +83,7 @@ fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> V
             );
         }
     }
-    twv_kernels::isa::force_baseline(false);
+    force(Isa::Avx512);
     one.iter().map(|p| p.status).collect()
 }
 
