@@ -22,15 +22,17 @@ step "ruff"
 .venv/bin/ruff check modeling analysis/benches python
 .venv/bin/ruff format --check modeling analysis/benches python
 
-# The modeling tests (sympy's Kane routes take ~20 s) run beside the Rust build, which leaves a
-# core idle while it compiles the analysis crate's front end; their log is printed after it.
-step "pytest modeling/ and the IR freshness check (in the background, beside the Rust build)"
+# Debian's Slurm and MUNGE for the cluster test at the end, installed while Rust builds.
+step "Slurm and MUNGE packages (in the background)"
 mkdir -p target
-modeling_log=target/pytest-modeling.log
-( "$py" -m pytest -q -p no:cacheprovider modeling/tests \
-    && echo "IR freshness (generated/ir is what the modeling code derives today):" \
-    && "$py" -m twv_modeling check ) >"$modeling_log" 2>&1 &
-modeling_pid=$!
+( bash .ci/slurm-test.sh --install-only >target/slurm-install.log 2>&1 ) &
+slurm_install_pid=$!
+
+step "pytest modeling/"
+"$py" -m pytest -q -p no:cacheprovider modeling/tests
+
+step "IR freshness (generated/ir is what the modeling code derives today)"
+"$py" -m twv_modeling check
 
 step "cargo fmt --check"
 cargo fmt --all --check
@@ -47,17 +49,16 @@ export RUSTC_WORKSPACE_WRAPPER="$PWD/.ci/clippy-rustc"
 cargo test --workspace --no-run --profile dev
 cargo build --workspace --benches --profile dev
 
-step "pytest modeling/ and the IR freshness check (their log)"
-modeling_status=0
-wait "$modeling_pid" || modeling_status=$?
-cat "$modeling_log"
-if [ "$modeling_status" -ne 0 ]; then
-    echo "pytest modeling/ or the IR freshness check failed (exit $modeling_status)"
-    exit "$modeling_status"
-fi
-
 step "cargo nextest (every test binary, in parallel)"
 cargo nextest run --workspace --cargo-profile dev --no-fail-fast
+
+step "a real single-node Slurm cluster: sbatch --array shards of a sweep, merged = unsharded"
+if ! wait "$slurm_install_pid"; then
+    cat target/slurm-install.log
+    echo "installing Slurm and MUNGE failed"
+    exit 1
+fi
+bash .ci/slurm-test.sh target/debug/twv
 
 step "cargo test --doc"
 cargo test --workspace --doc --profile dev

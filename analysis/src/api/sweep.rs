@@ -462,7 +462,8 @@ fn folder_error(path: &Path, e: impl std::fmt::Display) -> Error {
 /// An exclusive lock on `path` (created if missing), held while the value lives.
 struct Lock(#[allow(dead_code)] fs::File);
 
-fn try_lock(path: &Path, busy: impl FnOnce() -> Error) -> Result<Lock> {
+/// The lock on `path`, or `None` while another process holds it.
+fn try_lock(path: &Path) -> Result<Option<Lock>> {
     let file = fs::OpenOptions::new()
         .create(true)
         .truncate(false)
@@ -470,18 +471,37 @@ fn try_lock(path: &Path, busy: impl FnOnce() -> Error) -> Result<Lock> {
         .open(path)
         .map_err(|e| folder_error(path, e))?;
     match file.try_lock() {
-        Ok(()) => Ok(Lock(file)),
-        Err(fs::TryLockError::WouldBlock) => Err(busy()),
+        Ok(()) => Ok(Some(Lock(file))),
+        Err(fs::TryLockError::WouldBlock) => Ok(None),
         Err(fs::TryLockError::Error(e)) => Err(folder_error(path, e)),
     }
 }
 
+/// How long a task waits for another to finish claiming the folder (milliseconds of work)
+/// before giving up.
+const CLAIM_WAIT: std::time::Duration = std::time::Duration::from_secs(30);
+
 /// Claims `dir` for the sweep `config`: writes its manifest the first time; refuses a folder
-/// that holds another sweep (or other files) so no run overwrites another's results.
+/// that holds another sweep (or other files) so no run overwrites another's results. The tasks
+/// of an array job start together and take turns at this short set-up, each waiting up to
+/// [`CLAIM_WAIT`] for the lock (found by the Slurm test: the second task had been refused).
 fn claim_folder(dir: &Path, config: &SweepConfig) -> Result<()> {
-    let _lock = try_lock(&dir.join(".twv-sweep.lock"), || {
-        folder_error(dir, "another twv process is setting up this folder; retry")
-    })?;
+    let start = std::time::Instant::now();
+    let _lock = loop {
+        if let Some(lock) = try_lock(&dir.join(".twv-sweep.lock"))? {
+            break lock;
+        }
+        if start.elapsed() >= CLAIM_WAIT {
+            return Err(folder_error(
+                dir,
+                format!(
+                    "another twv process has been setting up this folder for {} s",
+                    CLAIM_WAIT.as_secs()
+                ),
+            ));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    };
     let manifest = dir.join("sweep.json");
     let hash = config.hash();
     if manifest.exists() {
@@ -579,9 +599,8 @@ fn run_shard_in(
 ) -> Result<ShardOutcome> {
     claim_folder(dir, config)?;
     let path = dir.join(shard.file_name());
-    let _lock = try_lock(&dir.join(format!(".{}.lock", shard.file_name())), || {
-        folder_error(&path, "another twv process is computing this shard")
-    })?;
+    let _lock = try_lock(&dir.join(format!(".{}.lock", shard.file_name())))?
+        .ok_or_else(|| folder_error(&path, "another twv process is computing this shard"))?;
     if path.exists() && !options.force {
         if let Ok(file) = ShardFile::read(&path) {
             if file.is_complete_for(config, shard) {

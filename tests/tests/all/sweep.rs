@@ -595,3 +595,25 @@ fn bad_parameter_axes_are_named() {
         );
     }
 }
+
+/// The tasks of an array job start together: four shards set up one new folder at the same
+/// moment, take turns at its manifest, and all succeed (regression: the Slurm test found the
+/// second task refused with "another twv process is setting up this folder").
+#[test]
+fn shards_starting_together_share_a_new_folder() {
+    let settings = spectral();
+    let dir = scratch("together");
+    std::thread::scope(|s| {
+        for i in 0..4 {
+            let (dir, settings) = (&dir, &settings);
+            s.spawn(move || shard(dir, settings, &format!("{i}/4")));
+        }
+    });
+    merge(&dir).unwrap();
+    let whole = scratch("together-whole");
+    shard(&whole, &settings, "0/1");
+    merge(&whole).unwrap();
+    assert_eq!(outputs(&dir), outputs(&whole));
+    fs::remove_dir_all(&dir).unwrap();
+    fs::remove_dir_all(&whole).unwrap();
+}
