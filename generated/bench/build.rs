@@ -1,5 +1,6 @@
 //! Writes CasADi's own C code for vehicle8 into OUT_DIR (the Python modeling step, `export-c`)
-//! and compiles it at -O3: the peer the generated Rust kernels are measured against.
+//! and compiles it at -O3: the peers the generated Rust kernels are measured against — the C of
+//! twv's own derivation, and of the same physics written by hand in CasADi (`export-c --hand`).
 //!
 //! Every `cargo clippy --all-targets` / `cargo test --workspace` builds this script, so it stays
 //! small: one Python call (~0.5 s) and one C file; it reruns only when the model's inputs change.
@@ -48,6 +49,7 @@ fn main() {
             "export-c",
             "--model",
             MODEL,
+            "--hand",
             "--out-dir",
         ])
         .arg(&out)
@@ -68,11 +70,14 @@ fn main() {
     }
 
     let c_file = out.join(format!("{MODEL}_casadi.c"));
+    // The second peer: the same physics written by hand in CasADi (`hand_peer.py`).
+    let hand_file = out.join(format!("{MODEL}_hand_casadi.c"));
     // -O3 and no -ffast-math: the C must round exactly as written so the benchmark can check it
     // bit for bit against the Rust kernels. No -march=native either: the Rust side is built for
     // the default target too, so both use the same instruction set.
     cc::Build::new()
         .file(&c_file)
+        .file(&hand_file)
         .opt_level(3)
         .flag("-O3")
         .flag_if_supported("-fno-fast-math")

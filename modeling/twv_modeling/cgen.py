@@ -4,11 +4,13 @@ Writes `<model>_casadi.c` (and `.h`) with, for runtime parameters, `<model>_f(x,
 `<model>_f_jac_x(x,u,p)` and `<model>_f_jw8(x,u,p,W)` (f and J W for 8 tangent vectors, W an
 NX x 8 matrix), and the same with the default parameters folded in (`*_baked`, arguments x, u
 and W). Parameters are substituted into f and its Jacobian jointly so that common
-subexpressions stay shared.
+subexpressions stay shared. The same for any other f of the model's symbols (the hand-written
+peer, `hand_peer.py`), under another name.
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import casadi as ca
@@ -18,17 +20,31 @@ from .derived import DerivedModel
 TANGENTS = 8
 
 
-def export_c(model: DerivedModel, out_dir: Path) -> Path:
+def operations(fn: ca.Function) -> int:
+    """The arithmetic operations of a CasADi function after CSE (its instructions less inputs,
+    outputs and constants): the count both exports are compared by."""
+    skip = {ca.OP_INPUT, ca.OP_OUTPUT, ca.OP_CONST}
+    return sum(fn.instruction_id(k) not in skip for k in range(fn.n_instructions()))
+
+
+def export_c(model: DerivedModel, out_dir: Path, f: ca.SX | None = None, tag: str = "") -> Path:
+    """Writes `<model><tag>_casadi.c` for `f` (default: the derivation's), its functions named
+    `<model><tag>_f`, ..., and `<model><tag>_ops.json` with their operation counts."""
     out_dir.mkdir(parents=True, exist_ok=True)
     x, u, p = model.x, model.u, model.p
-    f = model.expressions["f"]
+    own = f is None
+    f = model.expressions["f"] if own else f
     jac = ca.jacobian(f, x)
     W = ca.SX.sym("W", x.numel(), TANGENTS)
     jw = ca.mtimes(jac, W)
+    if not own:
+        # The derivation's sparsity for the ∂f/∂x output (extra entries are zeros), so both
+        # exports are read alike; J·W keeps this f's own, sparser Jacobian.
+        jac = ca.project(jac, ca.jacobian(model.expressions["f"], x).sparsity())
     defaults = ca.DM([prm.default for prm in model.params])
     baked = ca.substitute([f, jac, jw], [p], [defaults])
     opts = {"cse": True}
-    m = model.name
+    m = model.name + tag
     funcs = [
         ca.Function(f"{m}_f", [x, u, p], [f], opts),
         ca.Function(f"{m}_f_jac_x", [x, u, p], [f, jac], opts),
@@ -42,4 +58,6 @@ def export_c(model: DerivedModel, out_dir: Path) -> Path:
     for fn in funcs:
         cg.add(fn)
     cg.generate(str(out_dir) + "/")
+    counts = {fn.name().removeprefix(f"{m}_"): operations(fn) for fn in funcs[:3]}
+    (out_dir / f"{m}_ops.json").write_text(json.dumps(counts, sort_keys=True) + "\n")
     return out_dir / f"{name}.c"

@@ -89,8 +89,15 @@ def cmd_summary(args) -> int:
 def cmd_export_c(args) -> int:
     from .cgen import export_c
 
-    path = export_c(build(args.model), Path(args.out_dir))
-    print(path)
+    model = build(args.model)
+    print(export_c(model, Path(args.out_dir)))
+    if args.hand:
+        from .hand_peer import vehicle8_by_hand
+
+        if args.model != "vehicle8":
+            print("export-c --hand: the hand-written peer exists for vehicle8 only")
+            return 2
+        print(export_c(model, Path(args.out_dir), vehicle8_by_hand(model), tag="_hand"))
     return 0
 
 
@@ -116,6 +123,9 @@ def parser() -> argparse.ArgumentParser:
     e = sub.add_parser("export-c", help="write CasADi's own C code of a model (benchmark peer)")
     e.add_argument("--model", choices=SHIPPED, metavar="NAME", required=True)
     e.add_argument("--out-dir", required=True)
+    e.add_argument(
+        "--hand", action="store_true", help="also the hand-written peer (vehicle8: `_hand`)"
+    )
     e.set_defaults(run=cmd_export_c)
     return ap
 

@@ -8,7 +8,7 @@
 use std::hint::black_box;
 use std::process::ExitCode;
 
-use twv_bench::{compare, gate, time, Casadi, Pair, Plan, Point, Twv, K, NNZ, NX};
+use twv_bench::{compare, gate, hand_gate, time, Casadi, Pair, Plan, Point, Twv, K, NNZ, NX, OPS};
 use twv_generated::{baked, Vehicle8};
 use twv_model::Model;
 
@@ -77,9 +77,13 @@ fn main() -> ExitCode {
         eprintln!("twv-bench: the Rust kernels and CasADi's C disagree, nothing timed:\n{e}");
         return ExitCode::FAILURE;
     }
+    if let Err(e) = hand_gate(1000) {
+        eprintln!("twv-bench: the Rust kernels and the hand formulation disagree:\n{e}");
+        return ExitCode::FAILURE;
+    }
     println!(
         "correctness gate passed: f, jac_x and J·W within 1e-13 of the size of their terms \
-         (1001 points)"
+         (1001 points); the hand formulation's C within 1e-11 of each quantity's size"
     );
     if !timing {
         return ExitCode::SUCCESS;
@@ -127,6 +131,40 @@ fn main() -> ExitCode {
             );
         }
     }
+    // The second peer: the same physics written by hand in CasADi (Cramer's rule on the mass
+    // matrix's two 2x2 blocks, cse), what a careful user gets without twv.
+    let (h_runtime, h_baked) = match (
+        Casadi::hand_runtime(Vehicle8::DEFAULTS),
+        Casadi::hand_baked(),
+    ) {
+        (Ok(a), Ok(b)) => (a, b),
+        (Err(e), _) | (_, Err(e)) => {
+            eprintln!("twv-bench: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    println!();
+    println!(
+        "operations after CSE (f, f+jac_x, f_jw8): twv's derivation {}; the hand formulation {}",
+        OPS[0].trim(),
+        OPS[1].trim()
+    );
+    println!();
+    println!("| function | params | twv ns | hand-formulation C ns | ratio (twv/hand C) |");
+    println!("|---|---|---:|---:|---:|");
+    for function in ["f", "f+jac_x", "f_jw (K=8)"] {
+        for params in ["runtime", "baked"] {
+            let pair = match params {
+                "runtime" => measure(plan, function, &runtime, &h_runtime, &pt),
+                _ => measure(plan, function, &baked::Vehicle8, &h_baked, &pt),
+            };
+            println!(
+                "| {function} | {params} | {} | {} | {:.2} |",
+                pair.twv, pair.c, pair.ratio.median
+            );
+        }
+    }
+
     // The same kernels with their AVX-512 build switched off: what a CPU without AVX-512 gets
     // (and how much of the ratio is the run-time choice of instruction set).
     if twv_kernels::isa::avx512() {

@@ -101,6 +101,19 @@ casadi_function!(C_F_JW8 = "vehicle8_f_jw8");
 casadi_function!(C_F_BAKED = "vehicle8_f_baked");
 casadi_function!(C_F_JAC_X_BAKED = "vehicle8_f_jac_x_baked");
 casadi_function!(C_F_JW8_BAKED = "vehicle8_f_jw8_baked");
+casadi_function!(H_F = "vehicle8_hand_f");
+casadi_function!(H_F_JAC_X = "vehicle8_hand_f_jac_x");
+casadi_function!(H_F_JW8 = "vehicle8_hand_f_jw8");
+casadi_function!(H_F_BAKED = "vehicle8_hand_f_baked");
+casadi_function!(H_F_JAC_X_BAKED = "vehicle8_hand_f_jac_x_baked");
+casadi_function!(H_F_JW8_BAKED = "vehicle8_hand_f_jw8_baked");
+
+/// Operation counts (after CSE) of the exported functions `f`, `f_jac_x`, `f_jw8`: twv's
+/// derivation, then the hand formulation (JSON written by `export-c`).
+pub const OPS: [&str; 2] = [
+    include_str!(concat!(env!("OUT_DIR"), "/vehicle8_ops.json")),
+    include_str!(concat!(env!("OUT_DIR"), "/vehicle8_hand_ops.json")),
+];
 
 /// The dense shape `(rows, cols)` of a CasADi sparsity pattern, or `None` when it is not dense.
 ///
@@ -259,6 +272,16 @@ impl Casadi {
     /// The `*_baked` functions: CasADi folded the IR's default parameters into them.
     pub fn baked() -> Result<Self, String> {
         Self::new(None, [C_F_BAKED, C_F_JAC_X_BAKED, C_F_JW8_BAKED])
+    }
+
+    /// The hand formulation's C (`vehicle8_hand_f`, ...) with these parameter values.
+    pub fn hand_runtime(params: [f64; NP]) -> Result<Self, String> {
+        Self::new(Some(params), [H_F, H_F_JAC_X, H_F_JW8])
+    }
+
+    /// The hand formulation's C with the defaults folded in.
+    pub fn hand_baked() -> Result<Self, String> {
+        Self::new(None, [H_F_BAKED, H_F_JAC_X_BAKED, H_F_JW8_BAKED])
     }
 
     fn new(params: Option<[f64; NP]>, [f, fj, fjw]: [Entry; 3]) -> Result<Self, String> {
@@ -441,6 +464,49 @@ pub fn gate(n_random: u64) -> Result<(), String> {
             errors.join("\n  ")
         ))
     }
+}
+
+/// The hand formulation's C (runtime and baked) against the generated Rust at the bench point
+/// and `n_random` pseudo-random points: another formula for the same physics rounds
+/// differently, so each of f, ∂f/∂x and J·W must agree normwise to 1e-11 of its largest entry
+/// (a wrong term is off by its own size).
+pub fn hand_gate(n_random: u64) -> Result<(), String> {
+    let runtime = Vehicle8::with_defaults();
+    let peers = [
+        ("runtime", Casadi::hand_runtime(Vehicle8::DEFAULTS)?),
+        ("baked", Casadi::hand_baked()?),
+    ];
+    let points = std::iter::once(Point::bench()).chain((0..n_random).map(|s| Point::random(s + 2)));
+    for (i, pt) in points.enumerate() {
+        let mut f = [0.0; NX];
+        let jac = runtime.kernel_f_jac_x(&pt.x, &pt.u, &mut f);
+        let (mut f2, mut jw) = ([0.0; NX], [[0.0; NX]; K]);
+        runtime.f_jw::<K>(&pt.x, &pt.u, &pt.w, &mut f2, &mut jw);
+        for (mode, c) in &peers {
+            let (mut cf, mut cj) = ([0.0; NX], [0.0; NNZ]);
+            c.f_jac_x(&pt.x, &pt.u, &mut cf, &mut cj);
+            let (mut cf2, mut cjw) = ([0.0; NX], [[0.0; NX]; K]);
+            c.f_jw8(&pt.x, &pt.u, &pt.w, &mut cf2, &mut cjw);
+            for (what, a, b) in [
+                ("f", &f[..], &cf[..]),
+                ("jac_x", &jac[..], &cj[..]),
+                ("J·W", jw.as_flattened(), cjw.as_flattened()),
+            ] {
+                let size = b.iter().fold(0.0_f64, |m, v| m.max(v.abs())).max(1e-300);
+                let worst = a
+                    .iter()
+                    .zip(b)
+                    .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()));
+                if !(worst <= 1e-11 * size) {
+                    return Err(format!(
+                        "point {i}, {mode}: the hand formulation's {what} differs by {worst:e} \
+                         (largest entry {size:e})"
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The size of the terms behind each entry of f, the stored ∂f/∂x and J·W at one point.
