@@ -63,30 +63,28 @@ class SpectrumResult(Result):
         return self.raw["classification"]["kind"]
 
 
-class SimResult(Result):
-    """A closed-loop run: the time series (`series[name]`, `t`), metrics, how it ended and
-    whether the pitch recovered."""
+class _SeriesResult(Result):
+    """A result with a time series: `columns`, `data`, `series[name]` and `t`."""
 
     def __init__(self, raw: dict[str, Any], csv: str | None):
         super().__init__(raw)
         self.columns, self.data = _csv(csv)
         self.series = {c: self.data[:, i] for i, c in enumerate(self.columns)}
         self.t = self.series.get("t", np.zeros(0))
+
+
+class SimResult(_SeriesResult):
+    """A closed-loop run: the time series (`series[name]`, `t`), metrics, how it ended and
+    whether the pitch recovered."""
 
     @property
     def recovered(self) -> bool:
         return self.raw["recovery"] == "recovered"
 
 
-class RideResult(Result):
+class RideResult(_SeriesResult):
     """An uncontrolled run: the time series (`series[name]`, `t`), how it ended and the
     verdict on the watched state."""
-
-    def __init__(self, raw: dict[str, Any], csv: str | None):
-        super().__init__(raw)
-        self.columns, self.data = _csv(csv)
-        self.series = {c: self.data[:, i] for i, c in enumerate(self.columns)}
-        self.t = self.series.get("t", np.zeros(0))
 
     @property
     def verdict(self) -> str:

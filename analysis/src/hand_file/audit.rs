@@ -411,27 +411,48 @@ pub fn audit_hand_model(
             });
         }
     }
-    let worst = disagreements
-        .iter()
-        .max_by(|a, b| a.max_rel.total_cmp(&b.max_rel))
-        .map(|d| d.label.clone());
-    Ok(HandAuditReport {
-        model: ir.model().to_string(),
-        hand_file: hand.origin.clone(),
-        form: match hand.form {
-            HandForm::Explicit { .. } => "f",
-            HandForm::Mechanical { .. } => "mechanical",
-            HandForm::Linear { .. } => "linear",
-        },
-        samples: samples.len(),
-        seed: settings.seed,
-        tolerance: settings.tolerance,
-        param_spread: settings.param_spread,
+    let form = match hand.form {
+        HandForm::Explicit { .. } => "f",
+        HandForm::Mechanical { .. } => "mechanical",
+        HandForm::Linear { .. } => "linear",
+    };
+    Ok(HandAuditReport::from_parts(
+        (ir, hand, form),
+        samples.len(),
+        settings,
         quantities,
-        passed: disagreements.is_empty(),
         disagreements,
-        worst,
-    })
+    ))
+}
+
+impl HandAuditReport {
+    /// The report of an audit of `hand` (in `form`) against `ir`: the worst entry and the
+    /// verdict from the disagreements.
+    pub(super) fn from_parts(
+        (ir, hand, form): (&Ir, &HandModel, &'static str),
+        samples: usize,
+        settings: &HandAuditSettings,
+        quantities: Vec<QuantityError>,
+        disagreements: Vec<Disagreement>,
+    ) -> Self {
+        let worst = disagreements
+            .iter()
+            .max_by(|a, b| a.max_rel.total_cmp(&b.max_rel))
+            .map(|d| d.label.clone());
+        Self {
+            model: ir.model().to_string(),
+            hand_file: hand.origin.clone(),
+            form,
+            samples,
+            seed: settings.seed,
+            tolerance: settings.tolerance,
+            param_spread: settings.param_spread,
+            quantities,
+            passed: disagreements.is_empty(),
+            disagreements,
+            worst,
+        }
+    }
 }
 
 fn format_named(values: &[(String, f64)]) -> String {

@@ -242,21 +242,11 @@ pub(super) fn audit_linear(
             });
         }
     }
-    let worst = disagreements
-        .iter()
-        .max_by(|a, b| a.max_rel.total_cmp(&b.max_rel))
-        .map(|d| d.label.clone());
-    Ok(HandAuditReport {
-        model: ir.model().to_string(),
-        hand_file: hand.origin.clone(),
-        form: "linear",
-        samples: n,
-        seed: settings.seed,
-        tolerance: settings.tolerance,
-        param_spread: settings.param_spread,
+    Ok(HandAuditReport::from_parts(
+        (ir, hand, "linear"),
+        n,
+        settings,
         quantities,
-        passed: disagreements.is_empty(),
         disagreements,
-        worst,
-    })
+    ))
 }

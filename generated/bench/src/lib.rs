@@ -493,13 +493,15 @@ pub fn hand_gate(n_random: u64) -> Result<(), String> {
                 ("J·W", jw.as_flattened(), cjw.as_flattened()),
             ] {
                 let size = b.iter().fold(0.0_f64, |m, v| m.max(v.abs())).max(1e-300);
-                let worst = a
+                // A NaN difference counts as a disagreement (`max` would skip it).
+                let bad = a
                     .iter()
                     .zip(b)
-                    .fold(0.0_f64, |m, (x, y)| m.max((x - y).abs()));
-                if !(worst <= 1e-11 * size) {
+                    .map(|(x, y)| (x - y).abs())
+                    .find(|d| d.is_nan() || *d > 1e-11 * size);
+                if let Some(d) = bad {
                     return Err(format!(
-                        "point {i}, {mode}: the hand formulation's {what} differs by {worst:e} \
+                        "point {i}, {mode}: the hand formulation's {what} differs by {d:e} \
                          (largest entry {size:e})"
                     ));
                 }
