@@ -53,13 +53,15 @@ cargo build --workspace --benches --profile dev
 step "cargo nextest (every test binary, in parallel)"
 cargo nextest run --workspace --cargo-profile dev --no-fail-fast
 
-step "a real single-node Slurm cluster: sbatch --array shards of a sweep, merged = unsharded"
+# The cluster mostly waits on its daemons: it runs beside the doc tests and the Python package.
+step "a real single-node Slurm cluster: sbatch --array shards of a sweep (in the background)"
 if ! wait "$slurm_install_pid"; then
     cat target/slurm-install.log
     echo "installing Slurm and MUNGE failed"
     exit 1
 fi
-bash .ci/slurm-test.sh target/debug/twv
+( bash .ci/slurm-test.sh target/debug/twv >target/slurm-test.log 2>&1 ) &
+slurm_pid=$!
 
 step "cargo test --doc"
 cargo test --workspace --doc --profile dev
@@ -68,5 +70,14 @@ step "python package: build the extension into .venv (maturin), pytest python/te
 # --uv: the .venv's pinned uv installs the extension (pip resolving its dependencies took ~20 s).
 PATH="$PWD/.venv/bin:$PATH" VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --uv --quiet -m python/Cargo.toml
 TWV_BIN="$PWD/target/debug/twv" "$py" -m pytest -q -p no:cacheprovider python/tests
+
+step "the Slurm cluster test: merged shards = unsharded map (its log)"
+slurm_status=0
+wait "$slurm_pid" || slurm_status=$?
+cat target/slurm-test.log
+if [ "$slurm_status" -ne 0 ]; then
+    echo "the Slurm cluster test failed (exit $slurm_status)"
+    exit "$slurm_status"
+fi
 
 step "done"
