@@ -22,7 +22,7 @@ use crate::output::write_atomic;
 use crate::progress::Progress;
 use crate::sweep::{
     max_lyapunov_lanes, metric, Grid, Metric, MetricSettings, PointResult, Shard, ShardFile,
-    Status, SweepConfig, SweepError,
+    Status, SweepConfig, SweepError, TILT_AXIS,
 };
 
 /// The most points one sweep may have (each is a 10 s closed-loop run; the shard files hold
@@ -104,6 +104,26 @@ impl SweepSettings {
             ));
         }
         self.controller.validate()?;
+        if self.grid.params.iter().any(|a| a.name == TILT_AXIS) {
+            if !nonlinear {
+                return Err(Error::input(
+                    "param",
+                    "the tilt axis applies to the nonlinear metrics, not to spectral-abscissa",
+                ));
+            }
+            if self.x0.is_some() {
+                return Err(Error::input(
+                    "param",
+                    "give either an initial state (x0) or a tilt axis, not both",
+                ));
+            }
+            model.state_index("phi").ok_or_else(|| {
+                Error::input(
+                    "param",
+                    format!("{} has no state phi to tilt", model.name()),
+                )
+            })?;
+        }
         let x0 = match &self.x0 {
             Some(x) => {
                 check_vector("x0", x, &model.states())?;
@@ -129,7 +149,7 @@ impl SweepSettings {
 /// valid when its corners are).
 fn check_param_axes(model: &ResolvedModel, axes: &[crate::sweep::ParamAxis]) -> Result<()> {
     for (k, a) in axes.iter().enumerate() {
-        if !model.ir.params().iter().any(|p| p.name == a.name) {
+        if a.name != TILT_AXIS && !model.ir.params().iter().any(|p| p.name == a.name) {
             let known: Vec<&str> = model.ir.params().iter().map(|p| p.name.as_str()).collect();
             return Err(Error::input(
                 "param",
@@ -145,6 +165,7 @@ fn check_param_axes(model: &ResolvedModel, axes: &[crate::sweep::ParamAxis]) -> 
             return Err(Error::input("param", format!("`{}` has two axes", a.name)));
         }
     }
+    let axes: Vec<&crate::sweep::ParamAxis> = axes.iter().filter(|a| a.name != TILT_AXIS).collect();
     for corner in 0..(1usize << axes.len().min(16)) {
         let values: Vec<(String, f64)> = axes
             .iter()
@@ -168,10 +189,10 @@ fn model_at<'a>(
     grid: &Grid,
     setting: usize,
 ) -> Result<std::borrow::Cow<'a, ResolvedModel>> {
-    if grid.params.is_empty() {
+    let values = grid.model_values(setting);
+    if values.is_empty() {
         return Ok(std::borrow::Cow::Borrowed(model));
     }
-    let values = grid.param_values(setting);
     Ok(std::borrow::Cow::Owned(model.with_param_values(
         &values,
         "the sweep's parameter axes",
@@ -211,6 +232,13 @@ impl ControlTask for Chunk<'_> {
         x0.iter_mut()
             .zip(&self.config.x0)
             .for_each(|(o, v)| *o = *v);
+        // An operating-point axis: this chunk's runs start from its tilt.
+        let setting = self.config.grid.setting(self.indices.start);
+        if let (Some(tilt), Some(phi)) =
+            (self.config.grid.tilt(setting), resolved.state_index("phi"))
+        {
+            x0[phi] = tilt;
+        }
         let plant = Plant::from_info(&model.info(), |n| resolved.param(n))?;
         let s = &self.config.settings;
         let controller_at = |index: usize| ControllerSettings {

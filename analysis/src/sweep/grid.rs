@@ -77,8 +77,12 @@ impl Axis {
     }
 }
 
+/// The name of the operating-point axis over the initial tilt Φ0 [rad] of the nonlinear
+/// metrics (`--param tilt=A:B:N`): not a model parameter, the state the runs start from.
+pub const TILT_AXIS: &str = "tilt";
+
 /// A model parameter swept over `n` values from `lo` to `hi` (the IR's parameter name: `m2`,
-/// `I2_xx`, …).
+/// `I2_xx`, …), or the initial tilt ([`TILT_AXIS`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ParamAxis {
@@ -181,6 +185,21 @@ impl Grid {
             .collect()
     }
 
+    /// The initial tilt of setting `setting`, if the grid has a [`TILT_AXIS`].
+    pub fn tilt(&self, setting: usize) -> Option<f64> {
+        self.param_values(setting)
+            .into_iter()
+            .find(|(n, _)| n == TILT_AXIS)
+            .map(|(_, v)| v)
+    }
+
+    /// The model parameters of setting `setting` (the parameter axes less the tilt).
+    pub fn model_values(&self, setting: usize) -> Vec<(String, f64)> {
+        let mut v = self.param_values(setting);
+        v.retain(|(n, _)| n != TILT_AXIS);
+        v
+    }
+
     /// Every axis in index order (fastest first) with its label: Kp, Kd, Ki (if any), then the
     /// parameters.
     pub fn axes(&self) -> Vec<(String, Axis)> {
@@ -189,7 +208,14 @@ impl Grid {
             ("Kd [N s/rad]".to_string(), self.kd),
         ];
         out.extend(self.ki.map(|a| ("Ki [N/(rad s)]".to_string(), a)));
-        out.extend(self.params.iter().map(|p| (p.name.clone(), p.axis())));
+        out.extend(self.params.iter().map(|p| {
+            let label = if p.name == TILT_AXIS {
+                "initial tilt Φ0 [rad]".to_string()
+            } else {
+                p.name.clone()
+            };
+            (label, p.axis())
+        }));
         out
     }
 

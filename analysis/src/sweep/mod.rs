@@ -28,7 +28,7 @@ pub use config::{Metric, MetricSettings, SweepConfig};
 pub use error::{ranges, SweepError};
 pub use fall::FallStop;
 pub use file::{shard_paths, ShardFile, SHARD_FORMAT};
-pub use grid::{Axis, Grid, ParamAxis};
+pub use grid::{Axis, Grid, ParamAxis, TILT_AXIS};
 pub use lanes::max_lyapunov_lanes;
 pub use merge::{collect, merge, Map, MAP_FORMAT};
 pub use point::{PointResult, Status};

@@ -617,3 +617,48 @@ fn shards_starting_together_share_a_new_folder() {
     fs::remove_dir_all(&dir).unwrap();
     fs::remove_dir_all(&whole).unwrap();
 }
+
+/// An operating-point axis: `tilt` sweeps the initial pitch of the nonlinear metrics. Each
+/// point has the bits of the gain sweep started from that tilt, and the map shows the region of
+/// attraction: a weak loop catches a small tilt and drops a large one.
+#[test]
+fn a_tilt_axis_maps_the_region_of_attraction() {
+    let model = vehicle8();
+    let mut grid = grid("1500:2500:9", "800:800:1");
+    grid.params = vec![param_axis("tilt=0.1:1.2:3")];
+    let settings = SweepSettings::new(grid.clone(), Metric::MaxLyapunov);
+    let points = sweep(&model, &settings, &Silent).unwrap();
+    for setting in 0..3 {
+        let tilt = grid.tilt(setting).unwrap();
+        let mut gains_only = grid.clone();
+        gains_only.params.clear();
+        let direct = SweepSettings {
+            tilt,
+            ..SweepSettings::new(gains_only, Metric::MaxLyapunov)
+        };
+        let direct = sweep(&model, &direct, &Silent).unwrap();
+        for (a, b) in points[setting * 9..(setting + 1) * 9].iter().zip(&direct) {
+            assert_eq!(
+                a.value.map(f64::to_bits),
+                b.value.map(f64::to_bits),
+                "tilt {tilt}"
+            );
+            assert_eq!(a.status, b.status, "tilt {tilt}");
+        }
+    }
+    // Kp = 1500 catches 0.1 rad and drops 1.2 rad.
+    assert_eq!(points[0].status, Status::Ok);
+    assert!(points[0].value.unwrap() < 0.0);
+    assert_eq!(points[18].status, Status::Fell);
+    // The tilt axis belongs to the nonlinear metrics and replaces x0.
+    let mut linear = SweepSettings::new(grid.clone(), Metric::SpectralAbscissa);
+    let e = sweep(&model, &linear, &Silent).unwrap_err().to_string();
+    assert!(
+        e.contains("tilt axis applies to the nonlinear metrics"),
+        "{e}"
+    );
+    linear.metric = Metric::MaxLyapunov;
+    linear.x0 = Some(vec![0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    let e = sweep(&model, &linear, &Silent).unwrap_err().to_string();
+    assert!(e.contains("x0") && e.contains("tilt axis"), "{e}");
+}
