@@ -199,6 +199,31 @@ fn model_at<'a>(
     )?))
 }
 
+/// The model of every parameter setting that `ranges` touch, sorted by setting, each built
+/// (and checked) once; a borrow of `model` for a grid without parameter axes.
+fn models_by_setting<'a>(
+    model: &'a ResolvedModel,
+    grid: &Grid,
+    ranges: &[Range<usize>],
+) -> Result<Vec<(usize, std::borrow::Cow<'a, ResolvedModel>)>> {
+    let mut settings: Vec<usize> = ranges
+        .iter()
+        .filter(|r| !r.is_empty())
+        .flat_map(|r| grid.setting(r.start)..=grid.setting(r.end - 1))
+        .collect();
+    settings.sort_unstable();
+    settings.dedup();
+    settings
+        .into_par_iter()
+        .map(|k| Ok((k, model_at(model, grid, k)?)))
+        .collect()
+}
+
+/// The entry of setting `k` in a list sorted by setting that holds it.
+fn at_setting<T>(list: &[(usize, T)], k: usize) -> &T {
+    &list[list.partition_point(|(s, _)| *s < k)].1
+}
+
 /// The pitch loop at the upright (for the linear metric).
 struct UprightPitch;
 
@@ -332,20 +357,15 @@ fn compute_inner(
     progress: &dyn Progress,
 ) -> Result<Computed> {
     let grid = &config.grid;
+    let models = models_by_setting(model, grid, ranges)?;
     let mut points: Vec<PointResult> = match config.metric {
         Metric::SpectralAbscissa => {
-            // One pitch loop per parameter setting, computed where its first point is.
-            let indices: Vec<usize> = ranges.iter().cloned().flatten().collect();
-            let mut settings: Vec<usize> = indices.iter().map(|&i| grid.setting(i)).collect();
-            settings.dedup();
-            let loops: Vec<(usize, PitchLoop)> = settings
-                .into_par_iter()
-                .map(|k| Ok((k, dispatch(&*model_at(model, grid, k)?, UprightPitch)?)))
+            // One pitch loop per parameter setting.
+            let loops: Vec<(usize, PitchLoop)> = models
+                .par_iter()
+                .map(|(k, m)| Ok((*k, dispatch(m, UprightPitch)?)))
                 .collect::<Result<_>>()?;
-            let pitch_at = |k: usize| {
-                let at = loops.partition_point(|(s, _)| *s < k);
-                &loops[at].1
-            };
+            let indices: Vec<usize> = ranges.iter().cloned().flatten().collect();
             indices
                 .par_chunks(4096)
                 .map(|part| {
@@ -355,7 +375,8 @@ fn compute_inner(
                     let p: Vec<PointResult> = part
                         .iter()
                         .map(|&i| {
-                            metric::spectral_abscissa(pitch_at(grid.setting(i)), i, &grid.gains(i))
+                            let pitch = at_setting(&loops, grid.setting(i));
+                            metric::spectral_abscissa(pitch, i, &grid.gains(i))
                         })
                         .collect();
                     progress.advance(p.len() as u64);
@@ -386,13 +407,13 @@ fn compute_inner(
                         return Ok(None);
                     }
                     let n = indices.len() as u64;
-                    let at = model_at(model, grid, grid.setting(indices.start))?;
+                    let at = at_setting(&models, grid.setting(indices.start));
                     let task = Chunk {
                         config,
                         base,
                         indices,
                     };
-                    let p = dispatch_control(&at, nz0 + nz, task)?;
+                    let p = dispatch_control(at, nz0 + nz, task)?;
                     progress.advance(n);
                     Ok(Some(p))
                 })

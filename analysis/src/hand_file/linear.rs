@@ -73,17 +73,17 @@ struct DerivedLinear<'a> {
 }
 
 impl DerivedLinear<'_> {
-    fn state(&mut self, v: f64, p: &[f64]) -> Result<Vec<f64>> {
+    /// The steady motion's state at unit speed (the IR's `steady`) at parameters `p`.
+    fn unit_state(&mut self, p: &[f64]) -> Result<Vec<f64>> {
         let ir = self.derived.ir;
         let (x, u) = (vec![0.0; ir.nx()], vec![0.0; ir.nu()]);
-        let unit = self.derived.dense("steady", &x, &u, p)?;
-        Ok(unit.iter().map(|s| v * s).collect())
+        self.derived.dense("steady", &x, &u, p)
     }
 
-    /// A(v) restricted to the modes.
-    fn state_matrix(&mut self, v: f64, p: &[f64]) -> Result<DMatrix<f64>> {
+    /// A(v) restricted to the modes, at the steady motion `v · unit`.
+    fn state_matrix(&mut self, unit: &[f64], v: f64, p: &[f64]) -> Result<DMatrix<f64>> {
         let ir = self.derived.ir;
-        let x = self.state(v, p)?;
+        let x: Vec<f64> = unit.iter().map(|s| v * s).collect();
         let jac = self.derived.dense("jac_x", &x, &vec![0.0; ir.nu()], p)?;
         let (n, modes) = (ir.nx(), &self.modes);
         Ok(DMatrix::from_fn(modes.len(), modes.len(), |i, j| {
@@ -91,15 +91,18 @@ impl DerivedLinear<'_> {
         }))
     }
 
-    fn matrices(&mut self, p: &[f64]) -> Result<Linear> {
+    fn matrices(&mut self, unit: &[f64], p: &[f64]) -> Result<Linear> {
         let ir = self.derived.ir;
-        let x = self.state(0.0, p)?;
-        let full = self.derived.dense("M", &x, &vec![0.0; ir.nu()], p)?;
+        let rest = vec![0.0; unit.len()];
+        let full = self.derived.dense("M", &rest, &vec![0.0; ir.nu()], p)?;
         let ns = ir.ns();
         let r = &self.rate_speeds;
         let mass = DMatrix::from_fn(r.len(), r.len(), |i, j| full[r[i] * ns + r[j]]);
         let half = r.len();
-        let (a0, a1) = (self.state_matrix(0.0, p)?, self.state_matrix(1.0, p)?);
+        let (a0, a1) = (
+            self.state_matrix(unit, 0.0, p)?,
+            self.state_matrix(unit, 1.0, p)?,
+        );
         let stiffness = |a: &DMatrix<f64>| -&mass * a.view((half, 0), (half, half));
         let damping = |a: &DMatrix<f64>| -&mass * a.view((half, half), (half, half));
         let (k_0, k_1) = (stiffness(&a0), stiffness(&a1));
@@ -186,7 +189,8 @@ pub(super) fn audit_linear(
     let (mut all, mut given) = (tallies(), tallies());
     for (k, varied_p) in varied.iter().enumerate() {
         let p = varied_p.as_deref().unwrap_or(params);
-        let want = derived.matrices(p)?;
+        let unit = derived.unit_state(p)?;
+        let want = derived.matrices(&unit, p)?;
         let got = Linear {
             mass: hand_matrix(mass, p),
             c1: hand_matrix(c1, p),
@@ -194,7 +198,7 @@ pub(super) fn audit_linear(
             k2: hand_matrix(k2, p),
         };
         let v = sample_speed(k);
-        let a_want = derived.state_matrix(v, p)?;
+        let a_want = derived.state_matrix(&unit, v, p)?;
         let a_got = got
             .state_matrix(p[g], v)
             .unwrap_or_else(|| DMatrix::from_element(a_want.nrows(), a_want.ncols(), f64::NAN));

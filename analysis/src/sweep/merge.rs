@@ -239,46 +239,25 @@ impl Map {
         if !grid.params.is_empty() {
             return self.parameter_figures();
         }
-        let signed = self.config.metric != Metric::SettlingTime;
-        let (xs, ys) = (grid.kp.values(), grid.kd.values());
-        let mut out = Vec::new();
-        for (k, slice) in self.points.chunks(grid.map_len()).enumerate() {
-            let values: Vec<f64> = slice.iter().map(|p| p.value.unwrap_or(f64::NAN)).collect();
-            let missing: Vec<Option<&'static str>> = slice
-                .iter()
-                .map(|p| p.value.is_none().then(|| p.status.label()))
-                .collect();
-            let boundary: Vec<f64> = slice
-                .iter()
-                .map(|p| p.stability_indicator(signed))
-                .collect();
-            let ki = grid.ki.map_or(0.0, |a| a.value(k));
-            let title = format!(
-                "{} over (Kp, Kd), Ki = {ki}: {}",
-                self.config.model,
-                self.config.metric.label()
-            );
-            let map = Figure::Heat(HeatMap {
-                title,
-                x_label: "Kp [N/rad]".into(),
-                y_label: "Kd [N s/rad]".into(),
-                value_label: self.config.metric.label().into(),
-                xs: xs.clone(),
-                ys: ys.clone(),
-                values,
-                missing,
-                boundary,
-                signed,
-                size: (960, 700),
-            });
-            let name = if k == 0 {
-                "map.svg".to_string()
-            } else {
-                format!("map-ki-{k}.svg")
-            };
-            out.push((name, map));
-        }
-        out
+        let axes = grid.axes();
+        let n = grid.map_len();
+        (0..grid.n_ki())
+            .map(|k| {
+                let ki = grid.ki.map_or(0.0, |a| a.value(k));
+                let title = format!(
+                    "{} over (Kp, Kd), Ki = {ki}: {}",
+                    self.config.model,
+                    self.config.metric.label()
+                );
+                let indices: Vec<usize> = (k * n..(k + 1) * n).collect();
+                let name = if k == 0 {
+                    "map.svg".to_string()
+                } else {
+                    format!("map-ki-{k}.svg")
+                };
+                (name, self.heat_map(title, (&axes[0], &axes[1]), &indices))
+            })
+            .collect()
     }
 }
 

@@ -69,6 +69,30 @@ fn measure(plan: Plan, function: &str, twv: &impl Twv, c: &Casadi, pt: &Point) -
     }
 }
 
+/// The table of every kernel, runtime and baked, against a C peer's `[runtime, baked]` builds.
+fn peer_table(
+    plan: Plan,
+    pt: &Point,
+    (name, short): (&str, &str),
+    [c_runtime, c_baked]: [&Casadi; 2],
+    runtime: &Vehicle8,
+) {
+    println!("| function | params | twv ns | {name} ns | ratio (twv/{short}) |");
+    println!("|---|---|---:|---:|---:|");
+    for function in ["f", "f+jac_x", "f_jw (K=8)"] {
+        for params in ["runtime", "baked"] {
+            let pair = match params {
+                "runtime" => measure(plan, function, runtime, c_runtime, pt),
+                _ => measure(plan, function, &baked::Vehicle8, c_baked, pt),
+            };
+            println!(
+                "| {function} | {params} | {} | {} | {:.2} |",
+                pair.twv, pair.c, pair.ratio.median
+            );
+        }
+    }
+}
+
 fn main() -> ExitCode {
     // `cargo bench` passes `--bench`; `cargo test --benches` passes no `--bench` and only
     // wants to know that the target runs: then check correctness and stop.
@@ -117,20 +141,13 @@ fn main() -> ExitCode {
         }
     );
     println!();
-    println!("| function | params | twv ns | CasADi C ns | ratio (twv/C) |");
-    println!("|---|---|---:|---:|---:|");
-    for function in ["f", "f+jac_x", "f_jw (K=8)"] {
-        for params in ["runtime", "baked"] {
-            let pair = match params {
-                "runtime" => measure(plan, function, &runtime, &c_runtime, &pt),
-                _ => measure(plan, function, &baked::Vehicle8, &c_baked, &pt),
-            };
-            println!(
-                "| {function} | {params} | {} | {} | {:.2} |",
-                pair.twv, pair.c, pair.ratio.median
-            );
-        }
-    }
+    peer_table(
+        plan,
+        &pt,
+        ("CasADi C", "C"),
+        [&c_runtime, &c_baked],
+        &runtime,
+    );
     // The second peer: the same physics written by hand in CasADi (Cramer's rule on the mass
     // matrix's two 2x2 blocks, cse), what a careful user gets without twv.
     let (h_runtime, h_baked) = match (
@@ -150,20 +167,13 @@ fn main() -> ExitCode {
         OPS[1].trim()
     );
     println!();
-    println!("| function | params | twv ns | hand-formulation C ns | ratio (twv/hand C) |");
-    println!("|---|---|---:|---:|---:|");
-    for function in ["f", "f+jac_x", "f_jw (K=8)"] {
-        for params in ["runtime", "baked"] {
-            let pair = match params {
-                "runtime" => measure(plan, function, &runtime, &h_runtime, &pt),
-                _ => measure(plan, function, &baked::Vehicle8, &h_baked, &pt),
-            };
-            println!(
-                "| {function} | {params} | {} | {} | {:.2} |",
-                pair.twv, pair.c, pair.ratio.median
-            );
-        }
-    }
+    peer_table(
+        plan,
+        &pt,
+        ("hand-formulation C", "hand C"),
+        [&h_runtime, &h_baked],
+        &runtime,
+    );
 
     // The same kernels with their AVX-512 build switched off: what a CPU without AVX-512 gets
     // (and how much of the ratio is the run-time choice of instruction set).
