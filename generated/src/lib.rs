@@ -3,10 +3,7 @@
 //!
 //! - Runtime parameters: [`Vehicle8`], [`Vehicle7`], [`Segway7`], [`Lorenz`], [`HenonHeiles`]
 //!   (`new(values)`, `with_defaults()`, consts `NX`, `NU`, `NP`, `NS`, `PARAMS`, `DEFAULTS`).
-//! - Parameters folded as constants: `baked` (feature `baked`; the vehicles from `vehicles/paper.toml`,
-//!   `segway7` from `vehicles/segway.toml`, the explicit models from their IR defaults). Editing
-//!   one of those TOML files (or an IR file) and running `cargo build` rebuilds this crate with
-//!   the new constants: the macro `include_bytes!`es every file it reads.
+//! - Parameters folded as constants: the crate `twv-baked` beside this one (tests and bench).
 //! - The IR text of each model ([`ir_json`], [`MODELS`]) so a binary can embed it, and of the
 //!   shipped models that run on the interpreter ([`INTERPRETED`]: the Whipple bicycle).
 //! - [`visit`]: dispatch a model name to its concrete type without trait objects.
@@ -16,33 +13,6 @@ twv_macros::twv_model!(ir = "ir/vehicle7.json", name = Vehicle7);
 twv_macros::twv_model!(ir = "ir/segway7.json", name = Segway7);
 twv_macros::twv_model!(ir = "ir/lorenz.json", name = Lorenz);
 twv_macros::twv_model!(ir = "ir/henon_heiles.json", name = HenonHeiles);
-
-/// The shipped models with their parameters folded as compile-time constants (feature
-/// `baked`).
-#[cfg(feature = "baked")]
-pub mod baked {
-    twv_macros::twv_model!(
-        ir = "ir/vehicle8.json",
-        name = Vehicle8,
-        bake = "../vehicles/paper.toml"
-    );
-    twv_macros::twv_model!(
-        ir = "ir/vehicle7.json",
-        name = Vehicle7,
-        bake = "../vehicles/paper.toml"
-    );
-    twv_macros::twv_model!(
-        ir = "ir/segway7.json",
-        name = Segway7,
-        bake = "../vehicles/segway.toml"
-    );
-    twv_macros::twv_model!(ir = "ir/lorenz.json", name = Lorenz, bake = defaults);
-    twv_macros::twv_model!(
-        ir = "ir/henon_heiles.json",
-        name = HenonHeiles,
-        bake = defaults
-    );
-}
 
 /// (model name, IR file text) of every shipped model, in the order of the DESIGN's table.
 pub const MODELS: [(&str, &str); 5] = [

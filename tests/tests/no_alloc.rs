@@ -78,7 +78,7 @@ fn generated_models_do_not_allocate() {
         hot_path_allocations(&twv_generated::Lorenz::with_defaults()),
         0
     );
-    assert_eq!(hot_path_allocations(&twv_generated::baked::Vehicle8), 0);
+    assert_eq!(hot_path_allocations(&twv_baked_paper::Vehicle8), 0);
 }
 
 #[test]

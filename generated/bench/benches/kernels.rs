@@ -8,8 +8,9 @@
 use std::hint::black_box;
 use std::process::ExitCode;
 
+use twv_baked_paper as baked;
 use twv_bench::{compare, gate, hand_gate, time, Casadi, Pair, Plan, Point, Twv, K, NNZ, NX, OPS};
-use twv_generated::{baked, Vehicle8};
+use twv_generated::Vehicle8;
 use twv_model::Model;
 
 /// One row of the table: twv and CasADi's C for one function and parameter mode.

@@ -13,7 +13,8 @@ use std::fmt;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use twv_generated::{baked, Vehicle8};
+use twv_baked_paper as baked;
+use twv_generated::Vehicle8;
 use twv_ir::Ir;
 use twv_model::Model;
 

@@ -3,9 +3,10 @@
 //! and the clear errors of the IR validator, the parameter files and the macro.
 
 use crate::common::assert_bits;
+use crate::common::baked;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use twv_generated::{baked, HenonHeiles, Lorenz, Segway7, Vehicle7, Vehicle8};
+use twv_generated::{HenonHeiles, Lorenz, Segway7, Vehicle7, Vehicle8};
 use twv_ir::{Interpreted, Ir};
 use twv_model::{Mechanical, Model};
 
@@ -422,7 +423,10 @@ fn shipped_models_expose_sizes_and_metadata() {
         Vehicle8::with_defaults().info().ir_hash,
         shipped_ir("vehicle8").hash()
     );
-    assert_eq!(baked::Segway7::PARAMS_SOURCE, "../vehicles/segway.toml");
+    assert_eq!(
+        baked::Segway7::PARAMS_SOURCE,
+        "../../../vehicles/segway.toml"
+    );
     for (name, _) in twv_generated::MODELS {
         let ir = shipped_ir(name);
         assert_eq!(ir.model(), name);

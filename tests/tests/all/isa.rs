@@ -5,9 +5,10 @@
 //! included, so its C-library branch runs in both builds).
 
 use crate::common::assert_bits;
+use crate::common::baked;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use twv_generated::{baked, HenonHeiles, Lorenz, Segway7, Vehicle7, Vehicle8};
+use twv_generated::{HenonHeiles, Lorenz, Segway7, Vehicle7, Vehicle8};
 
 fn random_point<const NX: usize, const NU: usize>(rng: &mut ChaCha8Rng) -> ([f64; NX], [f64; NU]) {
     // Mostly moderate states; every eighth point far out (|x| up to 1e7 reaches the C library

@@ -8,3 +8,10 @@ pub fn assert_bits(a: &[f64], b: &[f64], what: &str) {
         assert_eq!(x.to_bits(), y.to_bits(), "{what}[{i}]: {x:e} vs {y:e}");
     }
 }
+
+/// Every shipped model with its parameters folded in as constants (two crates, one per kind of
+/// parameter source, so that editing `vehicles/paper.toml` rebuilds only the vehicles).
+pub mod baked {
+    pub use twv_baked_other::*;
+    pub use twv_baked_paper::*;
+}
