@@ -609,3 +609,41 @@ fn sweep_over_model_parameters() {
         "nothing written for a refused sweep"
     );
 }
+
+/// `twv linear --out` writes the pitch loop's frequency response and its Bode and Nyquist
+/// figures; the JSON's margins are the ones printed without `--out`.
+#[test]
+fn linear_writes_bode_and_nyquist_figures() {
+    let dir = scratch("linear-figures");
+    let out = twv(&[
+        "linear",
+        "--frequency-points",
+        "500",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("linear.json")).unwrap()).unwrap();
+    let response = &report["pitch"]["response"];
+    assert_eq!(response["w"].as_array().unwrap().len(), 500);
+    let crossover = response["gain_crossovers"][0].as_f64().unwrap();
+    let pm = &report["pitch"]["margins"]["phase_margin"];
+    assert_eq!(pm["frequency"].as_f64().unwrap(), crossover);
+    for name in ["bode", "nyquist"] {
+        let svg = std::fs::read_to_string(dir.join(format!("{name}.svg"))).unwrap();
+        roxmltree::Document::parse(&svg).unwrap();
+        assert!(svg.contains(&format!("{crossover:.3}")) || name == "nyquist");
+        let png = std::fs::read(dir.join(format!("{name}.png"))).unwrap();
+        assert!(png.starts_with(b"\x89PNG"));
+    }
+    // Without --out: no response in the JSON (the bytes of before).
+    let plain = twv(&["linear", "--json"]);
+    let plain: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
+    assert!(plain["pitch"].get("response").is_none());
+    assert_eq!(plain["pitch"]["margins"], report["pitch"]["margins"]);
+}

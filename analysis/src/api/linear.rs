@@ -8,10 +8,11 @@ use twv_model::{Model, ModelInfo};
 use crate::control::Plant;
 use crate::error::{Error, Result};
 use crate::linear::{
-    analyse_pitch, linearize, lqr, modes, CareStatus, HiddenPart, Linearization, LoopOptions, Lqr,
-    Margins, Mode, OperatingPoint, PidGains, PitchLoop,
+    analyse_pitch, linearize, loop_response, lqr, modes, CareStatus, HiddenPart, Linearization,
+    LoopOptions, LoopResponse, Lqr, Margins, Mode, OperatingPoint, PidGains, PitchLoop,
 };
 use crate::model::{dispatch, state_vector, ModelTask, ResolvedModel};
+use crate::output::Files;
 
 /// The cart–pendulum part of a vehicle, on which the LQR is designed (y, θ, v_y, w_z are not
 /// reachable by the pitch force).
@@ -48,7 +49,13 @@ pub struct LinearSettings {
     /// Accept an operating point that is not an equilibrium (then the eigenvalues describe a
     /// frozen-time linearisation along a trajectory, not a rest point).
     pub allow_non_equilibrium: bool,
+    /// Points of the loop's frequency response L(jω) to return (Bode and Nyquist plots); 0:
+    /// none, at most [`MAX_FREQUENCY_POINTS`].
+    pub frequency_points: usize,
 }
+
+/// The most frequency-response points one analysis returns.
+pub const MAX_FREQUENCY_POINTS: usize = 100_000;
 
 impl Default for LinearSettings {
     fn default() -> Self {
@@ -59,6 +66,7 @@ impl Default for LinearSettings {
             lqr_q: 1.0,
             lqr_r: 1e-4,
             allow_non_equilibrium: false,
+            frequency_points: 0,
         }
     }
 }
@@ -72,6 +80,15 @@ impl LinearSettings {
             }
         }
         self.loop_options.check()?;
+        if self.frequency_points > MAX_FREQUENCY_POINTS {
+            return Err(Error::input(
+                "frequency_points",
+                format!(
+                    "{} is more than {MAX_FREQUENCY_POINTS}",
+                    self.frequency_points
+                ),
+            ));
+        }
         for (field, v) in [
             ("kp", self.gains.kp),
             ("ki", self.gains.ki),
@@ -170,11 +187,20 @@ pub struct PitchReport {
     pub hidden: Vec<HiddenPart>,
     /// The margins, only for a stable loop.
     pub margins: Option<StableMargins>,
+    /// L(jω), when asked for (`frequency_points` > 0) and there is a loop.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub response: Option<LoopResponse>,
 }
 
 impl PitchReport {
-    /// The pitch loop of `lp` with `gains`.
-    pub fn of(lp: &PitchLoop, gains: &PidGains, options: &LoopOptions) -> Result<Self> {
+    /// The pitch loop of `lp` with `gains`, and its frequency response at `frequency_points`
+    /// frequencies (0: none).
+    pub fn of(
+        lp: &PitchLoop,
+        gains: &PidGains,
+        options: &LoopOptions,
+        frequency_points: usize,
+    ) -> Result<Self> {
         let analysis = analyse_pitch(lp, gains, options)?;
         let cl = &analysis.closed_loop;
         let verdict = if lp.plant().order() == 0 {
@@ -192,6 +218,10 @@ impl PitchReport {
             margins: match verdict {
                 LoopVerdict::Stable => StableMargins::of(&analysis.margins),
                 _ => None,
+            },
+            response: match (frequency_points, verdict) {
+                (0, _) | (_, LoopVerdict::NoLoop) => None,
+                (n, _) => Some(loop_response(lp, gains, options, &analysis, n)?),
             },
         })
     }
@@ -278,6 +308,7 @@ impl ModelTask for Linear<'_> {
             &pitch_loop(&lin, &info, resolved)?,
             &s.gains,
             &s.loop_options,
+            s.frequency_points,
         )?;
         let (lqr, lqr_note) = match lin.subsystem(&LQR_STATES) {
             Ok((a_sub, b_sub)) => {
@@ -392,6 +423,36 @@ impl PitchReport {
 }
 
 impl LinearReport {
+    /// The pitch loop's Bode and Nyquist figures (`bode.svg`, `nyquist.svg`), when the report
+    /// has its frequency response.
+    pub fn figures(&self) -> Vec<(String, crate::plot::Figure)> {
+        let g = &self.gains;
+        let title = format!(
+            "{} pitch loop, Kp {} Ki {} Kd {}",
+            self.model, g.kp, g.ki, g.kd
+        );
+        let Some(r) = &self.pitch.response else {
+            return Vec::new();
+        };
+        [
+            ("bode.svg", super::bode(&title, r)),
+            ("nyquist.svg", super::nyquist(&title, r)),
+        ]
+        .into_iter()
+        .filter_map(|(name, f)| Some((name.to_string(), f?)))
+        .collect()
+    }
+
+    /// linear.json and the figures with their PNGs.
+    pub fn files(&self) -> Result<Files> {
+        let mut f = Files::new();
+        f.json("linear.json", self);
+        for (name, figure) in self.figures() {
+            f.figure(&name, &figure)?;
+        }
+        Ok(f)
+    }
+
     /// A readable summary.
     pub fn summary(&self) -> String {
         let mut s = format!(

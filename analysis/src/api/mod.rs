@@ -23,6 +23,7 @@ mod codegen;
 mod eval;
 pub mod json;
 mod linear;
+mod loop_figures;
 mod phase;
 mod ride;
 mod simulate;
@@ -39,8 +40,9 @@ pub use codegen::{camel, generate, CodegenSettings};
 pub use eval::{evaluate, evaluate_batch, Batch, EvalResult, EvalSettings, Quantity};
 pub use linear::{
     analyse, complex, equilibrium_tolerance, pitch_loop, At, LinearReport, LinearSettings,
-    LoopVerdict, PhaseMargin, PitchReport, StableMargins, LQR_STATES,
+    LoopVerdict, PhaseMargin, PitchReport, StableMargins, LQR_STATES, MAX_FREQUENCY_POINTS,
 };
+pub use loop_figures::{bode, nyquist, NYQUIST_CLIP};
 pub use phase::{portraits, Drive, PhaseResult, PhaseRun, PhaseSettings, Portrait, DEFAULT_TILTS};
 pub use ride::{ride, ride_verdict, RideResult, RideSettings, RideVerdict, RIDE_DECAY, RIDE_TAIL};
 pub use simulate::{

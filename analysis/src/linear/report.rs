@@ -51,3 +51,64 @@ pub fn analyse_pitch(
         margins,
     })
 }
+
+/// The loop's return ratio L(jω) on a log grid: what a Bode and a Nyquist plot draw, with the
+/// crossings the margins come from (to mark them). Frequencies where L has a pole on the axis
+/// (ω = 0 with an integrator) are left out.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LoopResponse {
+    /// Frequencies [rad/s], increasing.
+    pub w: Vec<f64>,
+    /// Re L(jω).
+    pub re: Vec<f64>,
+    /// Im L(jω).
+    pub im: Vec<f64>,
+    /// 20 log10 |L(jω)| [dB].
+    pub magnitude_db: Vec<f64>,
+    /// ∠L(jω) [deg], unwrapped along the grid (continuous, starting in (−180°, 180°]).
+    pub phase_deg: Vec<f64>,
+    /// Where |L| = 1 [rad/s] (the phase margin is read there).
+    pub gain_crossovers: Vec<f64>,
+    /// Where L is real and negative [rad/s] (the gain margins are read there).
+    pub phase_crossovers: Vec<f64>,
+}
+
+/// L(jω) of `lp` at `points` log-spaced frequencies two decades either side of the loop's
+/// characteristic frequencies ([`loop_scales`]), delay included.
+pub fn loop_response(
+    lp: &PitchLoop,
+    gains: &PidGains,
+    opts: &LoopOptions,
+    analysis: &PitchAnalysis,
+    points: usize,
+) -> Result<LoopResponse, LinearError> {
+    let scales = loop_scales(lp, gains, opts, &analysis.closed_loop)?;
+    let wide = GridOptions::around(&scales);
+    let (lo, hi) = (wide.w_min * 1e3, wide.w_max * 1e-3);
+    let n = points.max(2);
+    let mut r = LoopResponse {
+        w: Vec::with_capacity(n),
+        re: Vec::with_capacity(n),
+        im: Vec::with_capacity(n),
+        magnitude_db: Vec::with_capacity(n),
+        phase_deg: Vec::with_capacity(n),
+        gain_crossovers: analysis.margins.gain_crossovers.clone(),
+        phase_crossovers: analysis.margins.phase_crossovers.clone(),
+    };
+    for k in 0..n {
+        let w = lo * (hi / lo).powf(k as f64 / (n - 1) as f64);
+        let Some(l) = lp.loop_response(gains, opts, w) else {
+            continue;
+        };
+        let mut phase = l.arg().to_degrees();
+        if let Some(&prev) = r.phase_deg.last() {
+            phase += 360.0 * ((prev - phase) / 360.0).round();
+        }
+        r.w.push(w);
+        r.re.push(l.re);
+        r.im.push(l.im);
+        r.magnitude_db.push(20.0 * l.norm().log10());
+        r.phase_deg.push(phase);
+    }
+    Ok(r)
+}

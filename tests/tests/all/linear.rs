@@ -9,9 +9,9 @@ use nalgebra::{Complex, DMatrix};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use twv_analysis::linear::{
-    analyse_pitch, eigenvalues, linearize, loop_margins, lqr, modes, solve_care, CareStatus,
-    CartPendulum, GridOptions, HiddenKind, LinearError, LoopOptions, ModeKind, OperatingPoint,
-    PidGains, PitchLoop,
+    analyse_pitch, eigenvalues, linearize, loop_margins, loop_response, lqr, modes, solve_care,
+    CareStatus, CartPendulum, GridOptions, HiddenKind, LinearError, LoopOptions, ModeKind,
+    OperatingPoint, PidGains, PitchLoop,
 };
 use twv_analysis::tune::{tune, Objective, Spec, SpecError, TuneError, TuneOptions, TuneStatus};
 use twv_model::{Model, ModelInfo};
@@ -575,4 +575,72 @@ fn reachable_disk_margins_are_solved_with_small_gains() {
             cert.gains
         );
     }
+}
+
+/// The frequency response the Bode and Nyquist figures draw is the closed form
+/// L(jω) = −c (Kp + j Kd ω)/(ω² + λ²) at every point, its phase is continuous, and the Nyquist
+/// criterion read off it — half-turns of 1 + L as ω runs over the grid, against the plant's one
+/// unstable pole — agrees with the closed-loop eigenvalues for stabilising and non-stabilising
+/// gains alike (two independent paths to the same verdict).
+#[test]
+fn frequency_response_is_the_closed_form_and_its_nyquist_count_matches_the_eigenvalues() {
+    let cp = paper();
+    let (c, a) = (cp.m_p * cp.l / cp.delta(), cp.lambda_sq());
+    let lp = pitch_loop();
+    let mxg = cp.m_x * cp.g;
+    let opts = LoopOptions::default();
+    let mut verdicts = Vec::new();
+    for (kp, kd) in [
+        (3860.0, 1980.0),
+        (2958.2, 675.8),
+        (1.5 * mxg, 50.0),
+        (0.8 * mxg, 1980.0),
+        (0.3 * mxg, 400.0),
+    ] {
+        let g = PidGains::pd(kp, kd);
+        let an = analyse_pitch(&lp, &g, &opts).unwrap();
+        let r = loop_response(&lp, &g, &opts, &an, 2000).unwrap();
+        assert_eq!(r.w.len(), 2000);
+        assert_eq!(r.gain_crossovers, an.margins.gain_crossovers);
+        for i in 0..r.w.len() {
+            let w = r.w[i];
+            let exact = -Complex::new(c * kp, c * kd * w) / (w * w + a);
+            let got = Complex::new(r.re[i], r.im[i]);
+            assert!(
+                (got - exact).norm() <= 1e-12 * exact.norm(),
+                "{w}: {got} vs {exact}"
+            );
+            assert!((r.magnitude_db[i] - 20.0 * exact.norm().log10()).abs() < 1e-9);
+            let wrapped = (r.phase_deg[i] - exact.arg().to_degrees()) / 360.0;
+            assert!((wrapped - wrapped.round()).abs() < 1e-9);
+            if i > 0 {
+                assert!(
+                    (r.phase_deg[i] - r.phase_deg[i - 1]).abs() < 30.0,
+                    "jump at {w}"
+                );
+                assert!(r.w[i] > r.w[i - 1]);
+            }
+        }
+        // Half-turns of 1 + L for ω from 0⁺ to ∞; the mirror image doubles them.
+        let turn: f64 = (1..r.w.len())
+            .map(|i| {
+                let p = Complex::new(1.0 + r.re[i - 1], r.im[i - 1]);
+                let q = Complex::new(1.0 + r.re[i], r.im[i]);
+                (q / p).arg()
+            })
+            .sum();
+        let encirclements = (turn / std::f64::consts::PI).round() as i64;
+        let unstable_poles = lp
+            .plant()
+            .poles()
+            .unwrap()
+            .iter()
+            .filter(|p| p.re > 0.0)
+            .count();
+        assert_eq!(unstable_poles, 1);
+        let nyquist_stable = encirclements == unstable_poles as i64;
+        assert_eq!(nyquist_stable, an.closed_loop.stable, "Kp {kp}, Kd {kd}");
+        verdicts.push(nyquist_stable);
+    }
+    assert_eq!(verdicts, [true, true, true, false, false]);
 }

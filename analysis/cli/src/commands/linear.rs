@@ -74,9 +74,15 @@ pub struct LinearArgs {
     /// nowhere self-stable
     #[arg(long, value_name = "LO:HI:STEP")]
     pub speed: Option<String>,
-    /// With --speed: write eigenvalues.csv, eigenvalues.svg/.png and steady.json here
-    #[arg(long, value_name = "DIR", requires = "speed")]
+    /// Write the results here: linear.json with the pitch loop's frequency response and its
+    /// Bode and Nyquist figures (bode.svg/.png, nyquist.svg/.png); with --speed
+    /// eigenvalues.csv, eigenvalues.svg/.png and steady.json
+    #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Points of the frequency response written with --out (log-spaced, two decades either
+    /// side of the loop's own frequencies)
+    #[arg(long, value_name = "N", default_value_t = 400)]
+    pub frequency_points: usize,
     /// Print JSON instead of the summary
     #[arg(long)]
     pub json: bool,
@@ -134,8 +140,16 @@ pub fn run(args: &LinearArgs, ctx: &Context) -> Result<Outcome> {
         lqr_q: args.lqr_q,
         lqr_r: args.lqr_r,
         allow_non_equilibrium: args.allow_non_equilibrium,
+        frequency_points: if args.out.is_some() {
+            args.frequency_points
+        } else {
+            0
+        },
     };
     let report = analyse(&model, &settings)?;
+    if let Some(dir) = &args.out {
+        write_files(ctx, dir, &report.files()?)?;
+    }
     print_result(&report, args.json, || report.summary())?;
     Ok(match report.pitch.verdict {
         LoopVerdict::Stable => Outcome::Done,
