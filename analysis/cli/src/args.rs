@@ -6,7 +6,7 @@ use clap::{Parser, Subcommand};
 use crate::commands::{
     audit::AuditArgs, codegen::CodegenArgs, disturb::DisturbArgs, eval::EvalArgs,
     linear::LinearArgs, lyap::LyapArgs, merge::MergeArgs, phase::PhaseArgs, report::ReportArgs,
-    ride::RideArgs, sim::SimArgs, sweep::SweepArgs, tune::TuneArgs,
+    ride::RideArgs, serve::ServeArgs, sim::SimArgs, sweep::SweepArgs, tune::TuneArgs,
 };
 
 /// twv: two-wheeled self-balancing vehicle dynamics — generated equations of motion, audit,
@@ -85,4 +85,7 @@ pub enum Command {
     Sweep(SweepArgs),
     /// Merge the shards of a sweep: check completeness, write map.csv, map.json, map.svg
     Merge(MergeArgs),
+    /// A live page on 127.0.0.1: gains and parameters as sliders, the response, margins and
+    /// maps redrawn as they move, and its JSON API under /api/
+    Serve(ServeArgs),
 }

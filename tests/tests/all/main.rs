@@ -19,6 +19,7 @@ mod lyapunov;
 mod lyapunov_parts;
 mod output;
 mod report;
+mod serve;
 mod steady;
 mod sweep;
 mod sweep_lanes;

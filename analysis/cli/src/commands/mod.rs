@@ -11,6 +11,7 @@ pub mod merge;
 pub mod phase;
 pub mod report;
 pub mod ride;
+pub mod serve;
 pub mod sim;
 pub mod sweep;
 pub mod tune;
@@ -36,6 +37,7 @@ pub fn run(command: &Command, ctx: &Context) -> Result<Outcome> {
         Command::Report(a) => report::run(a, ctx),
         Command::Sweep(a) => sweep::run(a, ctx),
         Command::Merge(a) => merge::run(a, ctx),
+        Command::Serve(a) => serve::run(a, ctx),
     }
 }
 

@@ -1,0 +1,423 @@
+// The live page: every control change sends the current settings to the JSON API (simulate,
+// margins, lyapunov, phase in parallel) and redraws from the answers. Nothing is computed here
+// but drawing: every number and verdict shown comes from the server. `window.twv` exposes the
+// last answers and an update counter (the browser test reads them).
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const twv = (window.twv = { updates: 0, generation: 0, last: {}, timing: {}, model: null });
+const params = {}; // vehicle parameter overrides by IR name
+let stateIndex = {};
+
+async function api(path, body) {
+  const init = body === undefined ? {} : {
+    method: "POST",
+    headers: { "Content-Type": "application/json" },
+    body: JSON.stringify(body),
+  };
+  const response = await fetch(path, init);
+  const answer = await response.json();
+  if (!response.ok) throw new Error(answer.error || response.statusText);
+  return answer;
+}
+
+const num = (id) => Number($(id).value);
+const optional = (id) => ($(id).value.trim() === "" ? null : Number($(id).value));
+const fmt = (v, digits = 3, unit = "") => (v === null || v === undefined ? "—" : `${Number(v).toPrecision(digits)}${unit}`);
+
+function gains() {
+  return { kp: num("kp"), ki: num("ki"), kd: num("kd") };
+}
+
+function controller() {
+  const setpoint = $("setpoint").value === "sine" ? { kind: "sine", amplitude: 0.03 } : { kind: "zero" };
+  return {
+    pitch: {
+      gains: gains(),
+      setpoint,
+      derivative_filter: optional("filter"),
+      saturation: optional("saturation"),
+    },
+  };
+}
+
+const tilt = () => (num("tilt") * Math.PI) / 180;
+
+// --- charts -----------------------------------------------------------------------------------
+
+const COLORS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f"];
+const charts = {};
+
+function chart(id, title, xLabel, yLabel, { logX = false, scatter = false } = {}) {
+  charts[id] = new Chart($(id), {
+    type: scatter ? "scatter" : "line",
+    data: { datasets: [] },
+    options: {
+      animation: false,
+      responsive: true,
+      maintainAspectRatio: false,
+      parsing: false,
+      normalized: true,
+      plugins: { title: { display: true, text: title }, legend: { labels: { boxWidth: 12 } } },
+      elements: { point: { radius: scatter ? 3 : 0 }, line: { borderWidth: 1.5 } },
+      scales: {
+        x: {
+          type: logX ? "logarithmic" : "linear",
+          title: { display: true, text: xLabel },
+          // Log axes: label the decades only.
+          ticks: logX ? { callback: (v) => (Math.abs(Math.log10(v) - Math.round(Math.log10(v))) < 1e-9 ? v : "") } : {},
+        },
+        y: { title: { display: true, text: yLabel } },
+      },
+    },
+  });
+}
+
+function draw(id, datasets) {
+  const c = charts[id];
+  c.data.datasets = datasets.map((d, i) => ({
+    borderColor: d.color || COLORS[i % COLORS.length],
+    backgroundColor: d.color || COLORS[i % COLORS.length],
+    showLine: d.line !== false,
+    pointRadius: d.line === false ? 4 : 0,
+    borderDash: d.dash || [],
+    ...d,
+  }));
+  c.update("none");
+}
+
+const xy = (xs, ys) => xs.map((x, i) => ({ x, y: ys[i] }));
+const vline = (x, lo, hi) => [{ x, y: lo }, { x, y: hi }];
+
+function setupCharts() {
+  chart("c-phi", "pitch Φ", "t [s]", "Φ [rad]");
+  chart("c-phidot", "pitch rate Φ̇", "t [s]", "w_y [rad/s]");
+  chart("c-force", "base force F", "t [s]", "F [N]");
+  chart("c-vx", "forward speed v_x", "t [s]", "v_x [m/s]");
+  chart("c-phase", "phase portrait (±tilt, ±2·tilt)", "Φ [rad]", "Φ̇ [rad/s]");
+  chart("c-poles", "closed-loop poles", "Re s [1/s]", "Im s [1/s]", { scatter: true });
+  chart("c-mag", "Bode magnitude of L(jω)", "ω [rad/s]", "|L| [dB]", { logX: true });
+  chart("c-arg", "Bode phase of L(jω)", "ω [rad/s]", "∠L [°]", { logX: true });
+  chart("c-nyquist", "Nyquist (|L| ≤ 5)", "Re L", "Im L");
+}
+
+// --- one update ----------------------------------------------------------------------------
+
+function showSimulation(answer) {
+  const s = answer.series;
+  const r = answer.result;
+  draw("c-phi", [{ label: "Φ", data: xy(s.t, s.phi) }, { label: "Φ_ref", data: xy(s.t, s.phi_ref), dash: [4, 3] }]);
+  draw("c-phidot", [{ label: "Φ̇", data: xy(s.t, s.w_y) }]);
+  draw("c-force", [{ label: "F", data: xy(s.t, s.F) }, { label: "F command", data: xy(s.t, s.F_cmd), dash: [4, 3] }]);
+  draw("c-vx", [{ label: "v_x", data: xy(s.t, s.v_x) }]);
+  const m = r.metrics;
+  setVerdict("recovery", r.recovery);
+  $("settling").textContent = fmt(m.phi.settling_time, 3, " s");
+  $("overshoot").textContent = m.phi.overshoot === null ? "—" : `${(100 * m.phi.overshoot).toFixed(1)} %`;
+  $("peak-force").textContent = fmt(m.peak_force, 4, " N");
+}
+
+function setVerdict(id, verdict) {
+  const el = $(id);
+  el.textContent = verdict.replace("_", " ");
+  el.className = `verdict ${verdict}`;
+  el.dataset.verdict = verdict;
+}
+
+function showMargins(answer) {
+  const r = answer.result;
+  const p = r.pitch;
+  setVerdict("loop-verdict", p.verdict);
+  const m = p.margins;
+  const set = (id, text, value) => {
+    $(id).textContent = text;
+    $(id).dataset.value = value === null || value === undefined ? "" : String(value);
+  };
+  if (m) {
+    set("gm", `[${fmt(m.gain_margin_lower, 4)}, ${m.gain_margin_upper === null ? "∞" : fmt(m.gain_margin_upper, 4)}]`, m.gain_margin_lower);
+    set("pm", m.phase_margin ? `${m.phase_margin.deg.toFixed(2)}° at ${fmt(m.phase_margin.frequency, 4)} rad/s` : "∞ (no crossover)", m.phase_margin ? m.phase_margin.deg : null);
+    set("dm", m.delay_margin === null ? "∞" : fmt(m.delay_margin, 3, " s"), m.delay_margin);
+    set("disk", `α = ${fmt(m.disk_alpha, 4)} (±${m.disk_phase_deg.toFixed(1)}°)`, m.disk_alpha);
+  } else {
+    for (const id of ["gm", "pm", "dm", "disk"]) set(id, "undefined (loop not stable)", null);
+  }
+  const poles = p.loop_poles.map(([re, im]) => ({ x: re, y: im }));
+  const open = r.open_loop.map((mode) => ({ x: mode.eigenvalue[0], y: mode.eigenvalue[1] }));
+  draw("c-poles", [
+    { label: "closed loop", data: poles, line: false },
+    { label: "open loop", data: open, line: false, pointStyle: "crossRot" },
+  ]);
+  const f = p.response;
+  if (!f) {
+    for (const id of ["c-mag", "c-arg", "c-nyquist"]) draw(id, []);
+    return;
+  }
+  const magLo = Math.min(...f.magnitude_db), magHi = Math.max(...f.magnitude_db);
+  const argLo = Math.min(...f.phase_deg), argHi = Math.max(...f.phase_deg);
+  const mag = [{ label: "|L|", data: xy(f.w, f.magnitude_db) }];
+  const arg = [{ label: "∠L", data: xy(f.w, f.phase_deg) }];
+  f.gain_crossovers.forEach((w) => {
+    mag.push({ label: `|L| = 1 at ${fmt(w, 4)}`, data: vline(w, magLo, magHi), dash: [4, 3] });
+    arg.push({ label: `|L| = 1 at ${fmt(w, 4)}`, data: vline(w, argLo, argHi), dash: [4, 3] });
+  });
+  f.phase_crossovers.filter((w) => w > 0).forEach((w) => {
+    mag.push({ label: `∠L = 180° at ${fmt(w, 4)}`, data: vline(w, magLo, magHi), dash: [2, 2] });
+  });
+  draw("c-mag", mag);
+  draw("c-arg", arg);
+  const near = f.re.map((re, i) => ({ x: re, y: f.im[i] })).filter((p) => Math.hypot(p.x, p.y) <= 5);
+  const circle = Array.from({ length: 121 }, (_, k) => ({ x: Math.cos((k * Math.PI) / 60), y: Math.sin((k * Math.PI) / 60) }));
+  draw("c-nyquist", [
+    { label: "ω > 0", data: near },
+    { label: "ω < 0", data: near.map((p) => ({ x: p.x, y: -p.y })), dash: [4, 3] },
+    { label: "|L| = 1", data: circle, color: "#999" },
+    { label: "−1", data: [{ x: -1, y: 0 }], line: false, color: "#d62728", pointStyle: "cross", pointRadius: 8 },
+  ]);
+}
+
+function showLyapunov(answer) {
+  const r = answer.result;
+  setVerdict("lyap-verdict", r.verdict);
+  const v = r.point.value;
+  $("lyap").textContent = v === null ? `no value (${r.point.status})` : `λ1 = ${v.toFixed(4)} 1/s (resolution ±${fmt(r.resolution, 3)})`;
+  $("lyap").dataset.value = v === null ? "" : String(v);
+}
+
+function showPhase(answer) {
+  draw("c-phase", answer.series.map((run) => ({
+    label: `Φ0 = ${run.phi0.toFixed(3)}`,
+    data: xy(run.phi, run.phi_dot),
+  })));
+}
+
+function showError(message) {
+  const box = $("error");
+  box.hidden = !message;
+  box.textContent = message || "";
+  document.querySelectorAll(".field-error").forEach((el) => (el.textContent = ""));
+  if (!message) return;
+  // A parameter the server refused: say so beside its field too.
+  const named = /`([^`]+)`/.exec(message);
+  if (named && $(`err-${named[1]}`)) $(`err-${named[1]}`).textContent = message;
+}
+
+async function update() {
+  const generation = ++twv.generation;
+  const c = controller();
+  const body = (settings) => ({ params, settings });
+  const loop = { lag: num("lag"), delay: num("delay") };
+  const jobs = {
+    simulate: api("/api/simulate", body({ controller: c, phi0: tilt() })),
+    margins: api("/api/margins", body({ gains: gains(), loop_options: loop, frequency_points: 300 })),
+    lyapunov: api("/api/lyapunov", body({ controller: c, tilt: tilt() })),
+    phase: api("/api/phase", body({ controller: c, tilts: [tilt(), -tilt(), 2 * tilt(), -2 * tilt()] })),
+  };
+  const names = Object.keys(jobs);
+  const settled = await Promise.allSettled(Object.values(jobs));
+  if (generation !== twv.generation) return; // a newer update is on its way
+  const errors = [];
+  settled.forEach((s, i) => {
+    const name = names[i];
+    if (s.status === "rejected") {
+      errors.push(`${name}: ${s.reason.message}`);
+      return;
+    }
+    twv.last[name] = s.value;
+    twv.timing[name] = s.value.server_ms;
+    ({ simulate: showSimulation, margins: showMargins, lyapunov: showLyapunov, phase: showPhase })[name](s.value);
+  });
+  showError(errors.length ? errors[0] : "");
+  const times = names.filter((n) => n in twv.timing).map((n) => `${n} ${twv.timing[n].toFixed(1)}`);
+  const slowest = Math.max(...names.map((n) => twv.timing[n] || 0));
+  $("timing").textContent = `server ms: ${times.join(" · ")} (slowest ${slowest.toFixed(1)} ms)`;
+  $("timing").dataset.slowest = String(slowest);
+  twv.gains = gains();
+  twv.errors = errors;
+  twv.updates += 1;
+  markMap();
+}
+
+let queued = false;
+function schedule() {
+  for (const id of ["kp", "ki", "kd"]) $(`${id}-out`).textContent = $(id).value;
+  $("tilt-out").textContent = $("tilt").value;
+  if (queued) return;
+  queued = true;
+  requestAnimationFrame(() => {
+    queued = false;
+    update();
+  });
+}
+
+// --- the map ---------------------------------------------------------------------------------
+
+const MAP_N = 20;
+let map = null; // { kp: [..], kd: [..], points: [[point per kp] per kd row] }
+
+function mapAxes() {
+  const kpMax = Number($("kp").max), kdMax = Number($("kd").max);
+  const axis = (hi) => Array.from({ length: MAP_N }, (_, i) => (hi * (i + 0.5)) / MAP_N);
+  return { kp: axis(kpMax), kd: axis(kdMax), kpMax, kdMax };
+}
+
+async function computeMap() {
+  const axes = mapAxes();
+  map = { ...axes, rows: [] };
+  $("map").disabled = true;
+  $("map-status").textContent = "";
+  const started = performance.now();
+  try {
+    for (let j = 0; j < MAP_N; j++) {
+      const c = controller();
+      const settings = {
+        grid: {
+          kp: { lo: axes.kp[0], hi: axes.kp[MAP_N - 1], n: MAP_N },
+          kd: { lo: axes.kd[j], hi: axes.kd[j], n: 1 },
+          ki: c.pitch.gains.ki ? { lo: c.pitch.gains.ki, hi: c.pitch.gains.ki, n: 1 } : null,
+        },
+        metric: "max-lyapunov",
+        tilt: tilt(),
+        controller: c,
+        metric_settings: twv.model.defaults.lyapunov.metric_settings,
+      };
+      const answer = await api("/api/map", { params, settings });
+      map.rows.push(answer.result);
+      $("map-progress").value = (j + 1) / MAP_N;
+      drawMap();
+    }
+    $("map-status").textContent = `${MAP_N * MAP_N} points in ${((performance.now() - started) / 1000).toFixed(1)} s`;
+  } catch (e) {
+    $("map-status").textContent = e.message;
+  }
+  $("map").disabled = false;
+}
+
+function drawMap() {
+  const canvas = $("c-map");
+  const g = canvas.getContext("2d");
+  g.clearRect(0, 0, canvas.width, canvas.height);
+  if (!map) return;
+  const pad = { l: 50, b: 30, t: 5, r: 5 };
+  const w = (canvas.width - pad.l - pad.r) / MAP_N, h = (canvas.height - pad.b - pad.t) / MAP_N;
+  const values = map.rows.flat().filter((p) => p.value !== null).map((p) => Math.abs(p.value));
+  const scale = Math.max(1e-9, ...values);
+  map.rows.forEach((row, j) => row.forEach((p, i) => {
+    let color = "#bbb";
+    if (p.value !== null) {
+      const a = Math.min(1, Math.abs(p.value) / scale) * 0.85 + 0.15;
+      color = p.value < 0 ? `rgba(31,119,180,${a})` : `rgba(214,39,40,${a})`;
+    }
+    g.fillStyle = color;
+    g.fillRect(pad.l + i * w, canvas.height - pad.b - (j + 1) * h, w - 1, h - 1);
+  }));
+  g.fillStyle = "#222";
+  g.font = "12px sans-serif";
+  g.fillText(`Kp 0 … ${map.kpMax} N/rad`, pad.l, canvas.height - 8);
+  g.save();
+  g.translate(14, canvas.height - pad.b);
+  g.rotate(-Math.PI / 2);
+  g.fillText(`Kd 0 … ${map.kdMax} N s/rad`, 0, 0);
+  g.restore();
+  markMap();
+}
+
+function markMap() {
+  if (!map) return;
+  const canvas = $("c-map");
+  const g = canvas.getContext("2d");
+  const pad = { l: 50, b: 30, t: 5, r: 5 };
+  const x = pad.l + (num("kp") / map.kpMax) * (canvas.width - pad.l - pad.r);
+  const y = canvas.height - pad.b - (num("kd") / map.kdMax) * (canvas.height - pad.b - pad.t);
+  g.strokeStyle = "#000";
+  g.lineWidth = 2;
+  g.beginPath();
+  g.arc(x, y, 6, 0, 2 * Math.PI);
+  g.stroke();
+}
+
+function clickMap(event) {
+  if (!map) return;
+  const canvas = $("c-map");
+  const rect = canvas.getBoundingClientRect();
+  const pad = { l: 50, b: 30, t: 5, r: 5 };
+  const fx = (event.clientX - rect.left - pad.l) / (canvas.width - pad.l - pad.r);
+  const fy = (canvas.height - pad.b - (event.clientY - rect.top)) / (canvas.height - pad.b - pad.t);
+  if (fx < 0 || fx > 1 || fy < 0 || fy > 1) return;
+  const i = Math.min(MAP_N - 1, Math.floor(fx * MAP_N)), j = Math.min(MAP_N - 1, Math.floor(fy * MAP_N));
+  $("kp").value = map.kp[i];
+  $("kd").value = map.kd[j];
+  drawMap();
+  schedule();
+}
+
+// --- tuning ----------------------------------------------------------------------------------
+
+async function tune() {
+  $("tune").disabled = true;
+  $("tune-status").textContent = "tuning…";
+  try {
+    const loop = { lag: num("lag"), delay: num("delay") };
+    const answer = await api("/api/tune", { params, settings: { spec: $("spec").value, tilt: tilt(), options: { loop_options: loop } } });
+    const r = answer.result;
+    const cert = r.result.certificate;
+    $("tune-status").innerHTML = "";
+    const verdict = document.createElement("span");
+    $("tune-status").append(verdict, ` (${answer.server_ms.toFixed(0)} ms)`);
+    verdict.textContent = r.verdict.replace("_", " ");
+    verdict.className = `verdict ${r.verdict}`;
+    if (cert && r.verdict === "met") {
+      for (const k of ["kp", "ki", "kd"]) $(k).value = cert.gains[k];
+      twv.tuned = cert.gains;
+      schedule();
+    }
+  } catch (e) {
+    $("tune-status").textContent = e.message;
+  }
+  $("tune").disabled = false;
+}
+
+// --- start -----------------------------------------------------------------------------------
+
+function paramFields(model) {
+  const box = $("params");
+  for (const p of model.params) {
+    const div = document.createElement("div");
+    div.className = "param";
+    div.innerHTML = `<label title="${p.description}">${p.name} [${p.unit}] <input type="number" step="any" id="param-${p.name}"></label><div class="field-error" id="err-${p.name}"></div>`;
+    box.append(div);
+    const input = div.querySelector("input");
+    input.value = p.value;
+    input.addEventListener("change", () => {
+      const v = Number(input.value);
+      if (input.value.trim() === "" || !Number.isFinite(v)) {
+        $(`err-${p.name}`).textContent = `${p.name}: not a number`;
+        return;
+      }
+      params[p.name] = v;
+      schedule();
+    });
+  }
+}
+
+async function start() {
+  const answer = await api("/api/model");
+  const model = (twv.model = answer.result);
+  $("model-name").textContent = model.model;
+  $("params-origin").textContent = `parameters: ${model.params_origin}`;
+  model.states.forEach((s, i) => (stateIndex[s] = i));
+  const g = model.defaults.margins.gains;
+  $("kp").value = g.kp;
+  $("ki").value = g.ki;
+  $("kd").value = g.kd;
+  $("tilt").value = ((model.defaults.simulate.phi0 * 180) / Math.PI).toFixed(1);
+  paramFields(model);
+  setupCharts();
+  for (const id of ["kp", "ki", "kd", "tilt"]) $(id).addEventListener("input", schedule);
+  for (const id of ["setpoint", "saturation", "filter", "lag", "delay"]) $(id).addEventListener("change", schedule);
+  $("map").addEventListener("click", computeMap);
+  $("c-map").addEventListener("click", clickMap);
+  $("tune").addEventListener("click", tune);
+  schedule();
+}
+
+start().catch((e) => showError(`cannot start: ${e.message}`));

@@ -1,0 +1,341 @@
+//! The live page's JSON API (`twv serve`): every endpoint's numbers are the library's for the
+//! same settings, bad and oversized requests get a 4xx with a reason, and the real server over
+//! a socket refuses a huge body without reading it and stops when asked.
+
+use std::io::{Read, Write};
+use std::net::TcpStream;
+
+use serde_json::{json, Value};
+use twv_analysis::api::{self, LinearSettings, Silent, SimSettings, TuneSettings};
+use twv_analysis::model::{ModelSpec, ResolvedModel};
+use twv_analysis::sweep::{PointResult, Status};
+use twv_serve::routes::{exponent_verdict, ExponentVerdict, LyapunovRequest, ENDPOINTS};
+use twv_serve::{respond, CancelFlag, ServeSettings, Server, State};
+
+fn model() -> ResolvedModel {
+    ModelSpec::shipped("vehicle8").resolve().unwrap()
+}
+
+fn post(state: &State, path: &str, body: &Value) -> (u16, Value) {
+    let reply = respond(state, "POST", path, body.to_string().as_bytes());
+    let value = serde_json::from_slice(&reply.body).unwrap();
+    (reply.status, value)
+}
+
+fn ok(state: &State, path: &str, body: &Value) -> Value {
+    let (status, answer) = post(state, path, body);
+    assert_eq!(status, 200, "{path}: {answer}");
+    assert!(answer["server_ms"].as_f64().unwrap() >= 0.0);
+    answer
+}
+
+fn error(state: &State, path: &str, body: &[u8], status: u16, needles: &[&str]) {
+    let reply = respond(state, "POST", path, body);
+    assert_eq!(reply.status, status, "{path}: {}", reply.text());
+    let message = serde_json::from_slice::<Value>(&reply.body).unwrap()["error"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    for n in needles {
+        assert!(message.contains(n), "`{n}` missing from: {message}");
+    }
+}
+
+fn library<T: serde::Serialize>(value: &T) -> Value {
+    serde_json::to_value(value).unwrap()
+}
+
+#[test]
+fn every_endpoint_gives_the_librarys_numbers() {
+    let state = State::new(model());
+    let m = model();
+    let gains = json!({"kp": 3000.0, "ki": 0.0, "kd": 900.0});
+    let controller = json!({"pitch": {"gains": gains, "saturation": 800.0}});
+
+    let sim = json!({"controller": controller, "phi0": 0.2});
+    let answer = ok(&state, "/api/simulate", &json!({ "settings": sim }));
+    let settings: SimSettings = serde_json::from_value(sim).unwrap();
+    let lib = api::simulate(&m, &settings, &Silent).unwrap();
+    assert_eq!(answer["result"], library(&lib));
+    let phi: Vec<f64> = serde_json::from_value(answer["series"]["phi"].clone()).unwrap();
+    let column = lib.columns.iter().position(|c| c == "phi").unwrap();
+    assert_eq!(phi, lib.rows.iter().map(|r| r[column]).collect::<Vec<_>>());
+
+    let margins = json!({"gains": gains, "frequency_points": 300});
+    let answer = ok(&state, "/api/margins", &json!({ "settings": margins }));
+    let settings: LinearSettings = serde_json::from_value(margins).unwrap();
+    let lib = api::analyse(&m, &settings).unwrap();
+    assert_eq!(answer["result"], library(&lib));
+    assert_eq!(
+        answer["result"]["pitch"]["response"]["w"]
+            .as_array()
+            .unwrap()
+            .len(),
+        300
+    );
+
+    let tune = json!({"spec": "dpm>=40", "tilt": 0.15});
+    let answer = ok(&state, "/api/tune", &json!({ "settings": tune }));
+    let settings: TuneSettings = serde_json::from_value(tune).unwrap();
+    assert_eq!(
+        answer["result"],
+        library(&api::tune_model(&m, &settings).unwrap())
+    );
+
+    let answer = ok(
+        &state,
+        "/api/phase",
+        &json!({"settings": {"controller": controller, "tilts": [0.1, -0.3]}}),
+    );
+    let runs = answer["series"].as_array().unwrap();
+    assert_eq!(runs.len(), 2);
+    assert_eq!(runs[1]["phi0"], json!(-0.3));
+    assert_eq!(runs[1]["phi"][0], json!(-0.3));
+
+    // The exponent is the map's metric at that one point, with its verdict.
+    let lyap = ok(
+        &state,
+        "/api/lyapunov",
+        &json!({"settings": {"controller": controller}}),
+    );
+    let row = json!({
+        "grid": {"kp": {"lo": 3000.0, "hi": 3000.0, "n": 1}, "kd": {"lo": 900.0, "hi": 900.0, "n": 1}},
+        "metric": "max-lyapunov",
+        "controller": controller,
+        "metric_settings": library(&LyapunovRequest::default().metric_settings),
+    });
+    let map = ok(&state, "/api/map", &json!({ "settings": row }));
+    assert_eq!(lyap["result"]["point"], map["result"][0]);
+    assert_eq!(lyap["result"]["verdict"], json!("stable"));
+    assert!(lyap["result"]["point"]["value"].as_f64().unwrap() < 0.0);
+}
+
+#[test]
+fn parameters_are_set_by_name_and_checked_like_a_file() {
+    let state = State::new(model());
+    let answer = ok(
+        &state,
+        "/api/margins",
+        &json!({"params": {"m2": 12.0, "b": 0.7}, "settings": {}}),
+    );
+    let heavier = model()
+        .with_param_values(&[("m2".into(), 12.0), ("b".into(), 0.7)], "the page")
+        .unwrap();
+    let lib = api::analyse(&heavier, &LinearSettings::default()).unwrap();
+    assert_eq!(answer["result"], library(&lib));
+    // A heavier, longer pendulum moves the open-loop pole: the parameters reached the model.
+    let default = ok(&state, "/api/margins", &json!({}));
+    assert_ne!(
+        answer["result"]["open_loop"][0],
+        default["result"]["open_loop"][0]
+    );
+    error(
+        &state,
+        "/api/simulate",
+        br#"{"params": {"I2_xx": -1}}"#,
+        422,
+        &["`I2_xx`", "positive"],
+    );
+    error(
+        &state,
+        "/api/simulate",
+        br#"{"params": {"mass": 3}}"#,
+        422,
+        &["unknown parameter `mass`"],
+    );
+}
+
+#[test]
+fn malformed_requests_get_400_with_a_reason() {
+    let state = State::new(model());
+    error(&state, "/api/simulate", b"{not json", 400, &["body:"]);
+    error(
+        &state,
+        "/api/simulate",
+        br#"{"setings": {}}"#,
+        400,
+        &["unknown field `setings`"],
+    );
+    error(
+        &state,
+        "/api/simulate",
+        br#"{"settings": {"phi0": "a lot"}}"#,
+        400,
+        &["phi0", "invalid type"],
+    );
+    error(
+        &state,
+        "/api/simulate",
+        &[0xff, 0xfe, b'{'],
+        400,
+        &["UTF-8"],
+    );
+    error(&state, "/api/map", b"{}", 400, &["grid", "metric"]);
+    error(
+        &state,
+        "/api/tune",
+        br#"{"settings": {"spec": "dpm>=banana"}}"#,
+        400,
+        &["spec"],
+    );
+    // Valid JSON the library refuses: 422, naming the field.
+    error(
+        &state,
+        "/api/simulate",
+        br#"{"settings": {"run": {"t_end": -1}}}"#,
+        422,
+        &["t_end"],
+    );
+    error(
+        &state,
+        "/api/lyapunov",
+        br#"{"settings": {"controller": {"pitch": {"saturation": -5}}}}"#,
+        422,
+        &["F_max", "-5"],
+    );
+    let reply = respond(&state, "GET", "/api/simulate", b"");
+    assert_eq!(reply.status, 405, "{}", reply.text());
+    assert_eq!(respond(&state, "DELETE", "/", b"").status, 405);
+    assert_eq!(respond(&state, "GET", "/etc/passwd", b"").status, 404);
+    assert_eq!(respond(&state, "GET", "/../Cargo.toml", b"").status, 404);
+    for (method, path) in ENDPOINTS {
+        assert_ne!(respond(&state, method, path, b"").status, 404, "{path}");
+    }
+    let page = respond(&state, "GET", "/", b"");
+    assert_eq!(
+        (page.status, page.content_type),
+        (200, "text/html; charset=utf-8")
+    );
+    assert!(page.text().contains("/vendor/chart.umd.min.js"));
+}
+
+#[test]
+fn oversized_requests_are_refused_before_any_work() {
+    let state = State::new(model());
+    let cases: [(&str, Value, &[&str]); 9] = [
+        (
+            "/api/simulate",
+            json!({"settings": {"run": {"t_end": 1e6}}}),
+            &["t_end", "limit"],
+        ),
+        (
+            "/api/simulate",
+            json!({"settings": {"run": {"t_end": 100.0, "integrator": {"kind": "rk4", "h": 1e-6}}}}),
+            &["steps", "limit"],
+        ),
+        (
+            "/api/simulate",
+            json!({"settings": {"run": {"sample": 1e-6}}}),
+            &["samples", "limit"],
+        ),
+        (
+            "/api/phase",
+            json!({"settings": {"tilts": vec![0.1; 100]}}),
+            &["tilts", "limit"],
+        ),
+        (
+            "/api/lyapunov",
+            json!({"settings": {"tilt": 1e308}}),
+            &["tilt", "limit"],
+        ),
+        (
+            "/api/simulate",
+            json!({"settings": {"phi0": -4.0}}),
+            &["phi0", "limit"],
+        ),
+        (
+            "/api/margins",
+            json!({"settings": {"frequency_points": 1_000_000}}),
+            &["frequency_points"],
+        ),
+        (
+            "/api/map",
+            json!({"settings": {"grid": {"kp": {"lo": 0, "hi": 8000, "n": 1000}, "kd": {"lo": 0, "hi": 4000, "n": 1000}}, "metric": "max-lyapunov"}}),
+            &["points", "limit"],
+        ),
+        (
+            "/api/lyapunov",
+            json!({"settings": {"metric_settings": {"h": 1e-3, "t_sample": 0.1, "iterations": 10000000, "transient": 0.0, "t_end": 10.0, "sample": 0.01, "fall_angle": 1.5}}}),
+            &["horizon", "limit"],
+        ),
+    ];
+    for (path, body, needles) in cases {
+        let started = std::time::Instant::now();
+        error(&state, path, body.to_string().as_bytes(), 413, needles);
+        assert!(started.elapsed().as_secs_f64() < 1.0, "{path} did work");
+    }
+}
+
+#[test]
+fn the_exponent_verdict_follows_the_value_and_its_resolution() {
+    let point = |value: Option<f64>, status| PointResult {
+        index: 0,
+        kp: 1.0,
+        ki: 0.0,
+        kd: 1.0,
+        value,
+        status,
+    };
+    let v = |value, status| exponent_verdict(&point(value, status), 0.5);
+    assert_eq!(v(Some(-0.6), Status::Ok), ExponentVerdict::Stable);
+    assert_eq!(v(Some(-0.4), Status::Ok), ExponentVerdict::Undecided);
+    assert_eq!(v(Some(0.4), Status::Ok), ExponentVerdict::Undecided);
+    assert_eq!(v(Some(0.6), Status::Ok), ExponentVerdict::Unstable);
+    assert_eq!(v(None, Status::Fell), ExponentVerdict::Fell);
+    assert_eq!(v(None, Status::BlewUp), ExponentVerdict::Failed);
+    // And on the model: gains below M_x g cannot hold the pendulum up.
+    let state = State::new(model());
+    let weak = json!({"settings": {"controller": {"pitch": {"gains": {"kp": 300.0, "ki": 0.0, "kd": 900.0}}}}});
+    let answer = ok(&state, "/api/lyapunov", &weak);
+    assert_eq!(answer["result"]["verdict"], json!("fell"), "{answer}");
+}
+
+fn http(addr: std::net::SocketAddr, request: &[u8]) -> String {
+    let mut stream = TcpStream::connect(addr).unwrap();
+    stream
+        .set_read_timeout(Some(std::time::Duration::from_secs(20)))
+        .unwrap();
+    stream.write_all(request).unwrap();
+    let mut text = String::new();
+    let _ = stream.read_to_string(&mut text);
+    text
+}
+
+#[test]
+fn the_server_answers_over_a_socket_refuses_huge_bodies_unread_and_stops() {
+    let settings = ServeSettings {
+        port: 0,
+        ..ServeSettings::default()
+    };
+    let server = Server::bind(model(), &settings).unwrap();
+    let addr = server.addr();
+    assert!(addr.ip().is_loopback());
+    static STOP: CancelFlag = CancelFlag::new();
+    std::thread::scope(|scope| {
+        scope.spawn(|| server.run(&STOP));
+        let page = http(
+            addr,
+            b"GET / HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n",
+        );
+        assert!(page.starts_with("HTTP/1.1 200"), "{page}");
+        assert!(page.contains("text/html"));
+        // 1 GB announced, nothing sent: refused at once, not read.
+        let huge = http(
+            addr,
+            b"POST /api/simulate HTTP/1.1\r\nHost: x\r\nContent-Length: 1000000000\r\nConnection: close\r\n\r\n",
+        );
+        assert!(huge.starts_with("HTTP/1.1 413"), "{huge}");
+        assert!(huge.contains("limit"), "{huge}");
+        let body = br#"{"settings": {"phi0": 0.05}}"#;
+        let mut request = format!(
+            "POST /api/simulate HTTP/1.1\r\nHost: x\r\nContent-Length: {}\r\nConnection: close\r\n\r\n",
+            body.len()
+        )
+        .into_bytes();
+        request.extend_from_slice(body);
+        let sim = http(addr, &request);
+        assert!(sim.starts_with("HTTP/1.1 200"), "{sim}");
+        assert!(sim.contains("\"recovery\":\"recovered\""), "{sim}");
+        STOP.raise();
+    });
+}
