@@ -19,13 +19,15 @@ bash .ci/setup-python.sh
 py=.venv/bin/python
 
 step "ruff"
-.venv/bin/ruff check modeling analysis/benches python
-.venv/bin/ruff format --check modeling analysis/benches python
+.venv/bin/ruff check modeling analysis/benches analysis/serve/browser python
+.venv/bin/ruff format --check modeling analysis/benches analysis/serve/browser python
 
-# Debian's Slurm and MUNGE for the cluster test at the end, installed while Rust builds.
-step "Slurm and MUNGE packages (in the background)"
+# Debian's Slurm and MUNGE for the cluster test and Chromium with its WebDriver for the browser
+# test at the end, installed while Rust builds (one after the other: apt holds a lock).
+step "Slurm, MUNGE, Chromium and ChromeDriver packages (in the background)"
 mkdir -p target
-( bash .ci/slurm-test.sh --install-only >target/slurm-install.log 2>&1 ) &
+( bash .ci/slurm-test.sh --install-only && bash .ci/browser-test.sh --install-only ) \
+    >target/slurm-install.log 2>&1 &
 slurm_install_pid=$!
 
 step "pytest modeling/"
@@ -57,7 +59,7 @@ cargo nextest run --workspace --cargo-profile dev --no-fail-fast
 step "a real single-node Slurm cluster: sbatch --array shards of a sweep (in the background)"
 if ! wait "$slurm_install_pid"; then
     cat target/slurm-install.log
-    echo "installing Slurm and MUNGE failed"
+    echo "installing Slurm, MUNGE or Chromium failed"
     exit 1
 fi
 ( bash .ci/slurm-test.sh target/debug/twv >target/slurm-test.log 2>&1 ) &
@@ -70,6 +72,9 @@ step "python package: build the extension into .venv (maturin), pytest python/te
 # --uv: the .venv's pinned uv installs the extension (pip resolving its dependencies took ~20 s).
 PATH="$PWD/.venv/bin:$PATH" VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --uv --quiet -m python/Cargo.toml
 TWV_BIN="$PWD/target/debug/twv" "$py" -m pytest -q -p no:cacheprovider python/tests
+
+step "twv serve in a real browser (headless Chromium through WebDriver)"
+bash .ci/browser-test.sh target/debug/twv
 
 step "the Slurm cluster test: merged shards = unsharded map (its log)"
 slurm_status=0

@@ -46,7 +46,7 @@ const tilt = () => (num("tilt") * Math.PI) / 180;
 // --- charts -----------------------------------------------------------------------------------
 
 const COLORS = ["#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f"];
-const charts = {};
+const charts = (twv.charts = {});
 
 function chart(id, title, xLabel, yLabel, { logX = false, scatter = false } = {}) {
   charts[id] = new Chart($(id), {
@@ -203,12 +203,13 @@ function showError(message) {
 
 async function update() {
   const generation = ++twv.generation;
+  const g = gains(); // what this update draws (the sliders may move while it runs)
   const c = controller();
   const body = (settings) => ({ params, settings });
   const loop = { lag: num("lag"), delay: num("delay") };
   const jobs = {
     simulate: api("/api/simulate", body({ controller: c, phi0: tilt() })),
-    margins: api("/api/margins", body({ gains: gains(), loop_options: loop, frequency_points: 300 })),
+    margins: api("/api/margins", body({ gains: g, loop_options: loop, frequency_points: 300 })),
     lyapunov: api("/api/lyapunov", body({ controller: c, tilt: tilt() })),
     phase: api("/api/phase", body({ controller: c, tilts: [tilt(), -tilt(), 2 * tilt(), -2 * tilt()] })),
   };
@@ -231,7 +232,7 @@ async function update() {
   const slowest = Math.max(...names.map((n) => twv.timing[n] || 0));
   $("timing").textContent = `server ms: ${times.join(" · ")} (slowest ${slowest.toFixed(1)} ms)`;
   $("timing").dataset.slowest = String(slowest);
-  twv.gains = gains();
+  twv.gains = g;
   twv.errors = errors;
   twv.updates += 1;
   markMap();

@@ -147,7 +147,7 @@ pub enum ParamProblem {
     },
     #[error("`{field}` must be finite, got {value}")]
     NonFinite { field: String, value: f64 },
-    #[error("`{field}` is a {kind} and must be positive, got {value}")]
+    #[error("`{field}` ({kind}) must be positive, got {value}")]
     NotPositive {
         field: String,
         kind: String,

@@ -1,0 +1,221 @@
+"""The live page of `twv serve` in a real browser: Debian's chromium, headless, driven through
+chromium-driver (WebDriver) by selenium. A server started here serves the page; the test moves
+the Kp slider with the pointer, waits for the redraw, and checks that the plotted recovery and
+the printed margins are the library's for the new gains — computed independently by the `twv`
+binary's CLI (`twv linear --json`, `twv sim --out`). A screenshot is kept as an artefact
+(target/browser/, or $TWV_ARTEFACTS).
+
+Needs /usr/bin/chromium and /usr/bin/chromedriver: the README's test command installs them
+(apt packages chromium and chromium-driver). Without them this test fails; it is not skipped.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+from selenium import webdriver
+from selenium.webdriver.chrome.service import Service
+from selenium.webdriver.common.action_chains import ActionChains
+
+ROOT = Path(__file__).resolve().parents[3]
+TWV = Path(os.environ.get("TWV_BIN", ROOT / "target" / "debug" / "twv"))
+ARTEFACTS = Path(os.environ.get("TWV_ARTEFACTS", ROOT / "target" / "browser"))
+CHROMIUM = Path("/usr/bin/chromium")
+CHROMEDRIVER = Path("/usr/bin/chromedriver")
+
+
+def twv(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [str(TWV), *args], capture_output=True, text=True, timeout=120, check=False
+    )
+
+
+@pytest.fixture(scope="module")
+def server():
+    assert TWV.exists(), f"{TWV}: build the twv binary first (cargo build -p twv-cli)"
+    proc = subprocess.Popen(
+        [str(TWV), "serve", "--port", "0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    line = proc.stdout.readline()
+    assert line.startswith("twv serve: http://127.0.0.1:"), line + proc.stderr.read()
+    url = line.split()[2]
+    yield url
+    proc.terminate()
+    proc.wait(timeout=10)
+
+
+@pytest.fixture(scope="module")
+def browser():
+    for path in (CHROMIUM, CHROMEDRIVER):
+        assert path.exists(), (
+            f"{path} missing: apt-get install chromium chromium-driver"
+        )
+    options = webdriver.ChromeOptions()
+    options.binary_location = str(CHROMIUM)
+    for arg in (
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-dev-shm-usage",
+        "--window-size=1500,2000",
+    ):
+        options.add_argument(arg)
+    driver = webdriver.Chrome(service=Service(str(CHROMEDRIVER)), options=options)
+    yield driver
+    driver.quit()
+
+
+def wait_for(driver, script: str, timeout: float = 30.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = driver.execute_script(script)
+        if value:
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"timed out waiting for: {script}")
+
+
+def shown(driver, element_id: str) -> float:
+    return float(driver.find_element("id", element_id).get_attribute("data-value"))
+
+
+def cli_margins(kp: float, ki: float, kd: float) -> dict:
+    out = twv("linear", "--json", "--gains", f"{kp!r},{ki!r},{kd!r}")
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout)["pitch"]["margins"]
+
+
+def cli_phi(tmp: Path, kp: float, ki: float, kd: float, tilt: float) -> list[float]:
+    out = twv(
+        "sim",
+        "--gains",
+        f"{kp!r},{ki!r},{kd!r}",
+        "--tilt",
+        repr(tilt),
+        "--out",
+        str(tmp),
+    )
+    assert out.returncode == 0, out.stderr
+    with open(tmp / "sim.csv", newline="") as f:
+        return [float(row["phi"]) for row in csv.DictReader(f)]
+
+
+def page_state(driver) -> dict:
+    return driver.execute_script(
+        """
+        const t = window.twv;
+        return {
+          updates: t.updates, errors: t.errors, gains: t.gains,
+          tilt: Number(document.getElementById('tilt').value) * Math.PI / 180,
+          phi: t.charts['c-phi'].data.datasets[0].data.map(p => p.y),
+          timing: t.timing,
+        };
+        """
+    )
+
+
+def check_against_cli(driver, tmp: Path) -> dict:
+    state = page_state(driver)
+    assert not state["errors"], state["errors"]
+    g = state["gains"]
+    margins = cli_margins(g["kp"], g["ki"], g["kd"])
+    assert shown(driver, "pm") == margins["phase_margin"]["deg"]
+    assert shown(driver, "gm") == margins["gain_margin_lower"]
+    assert shown(driver, "dm") == margins["delay_margin"]
+    assert shown(driver, "disk") == margins["disk_alpha"]
+    phi = cli_phi(tmp, g["kp"], g["ki"], g["kd"], state["tilt"])
+    assert state["phi"] == phi, "the plotted recovery is not the CLI's"
+    state["phase_margin"] = margins["phase_margin"]["deg"]
+    return state
+
+
+def test_moving_the_kp_slider_redraws_with_the_librarys_numbers(
+    server, browser, tmp_path
+):
+    browser.get(server)
+    wait_for(browser, "return window.twv && window.twv.updates >= 1")
+    before = check_against_cli(browser, tmp_path / "before")
+    assert before["gains"] == {"kp": 3860, "ki": 0, "kd": 1980}
+
+    slider = browser.find_element("id", "kp")
+    updates = before["updates"]
+    # A real pointer drag of the thumb to the left: Kp falls.
+    ActionChains(browser).click_and_hold(slider).move_by_offset(
+        -70, 0
+    ).release().perform()
+    wait_for(
+        browser, f"return window.twv.updates > {updates} && window.twv.gains.kp != 3860"
+    )
+    # Let a redraw queued by the last pointer event finish.
+    time.sleep(0.5)
+    wait_for(
+        browser,
+        "return window.twv.gains.kp == Number(document.getElementById('kp').value)",
+    )
+    after = check_against_cli(browser, tmp_path / "after")
+    assert after["gains"]["kp"] < 3860
+    assert after["phi"] != before["phi"]
+    assert after["phase_margin"] != before["phase_margin"]
+
+    ARTEFACTS.mkdir(parents=True, exist_ok=True)
+    browser.save_screenshot(str(ARTEFACTS / "serve-page.png"))
+    print(f"server time per request [ms]: {after['timing']}; screenshot in {ARTEFACTS}")
+
+
+def test_an_impossible_parameter_is_named_beside_its_field_and_nothing_breaks(
+    server, browser
+):
+    browser.get(server)
+    wait_for(browser, "return window.twv && window.twv.updates >= 1")
+    updates = browser.execute_script("return window.twv.updates")
+    browser.execute_script(
+        "const f = document.getElementById('param-I2_xx'); f.value = '-1';"
+        "f.dispatchEvent(new Event('change'));"
+    )
+    wait_for(browser, f"return window.twv.updates > {updates}")
+    message = browser.find_element("id", "err-I2_xx").text
+    assert "`I2_xx`" in message and "positive" in message, message
+    assert browser.find_element("id", "error").is_displayed()
+    # Fixed again: the error goes, the plots redraw.
+    updates = browser.execute_script("return window.twv.updates")
+    browser.execute_script(
+        "const f = document.getElementById('param-I2_xx'); f.value = '0.81';"
+        "f.dispatchEvent(new Event('change'));"
+    )
+    wait_for(browser, f"return window.twv.updates > {updates}")
+    assert browser.find_element("id", "err-I2_xx").text == ""
+    assert not browser.execute_script("return window.twv.errors.length")
+
+
+def test_tune_moves_the_sliders_to_the_certificate(server, browser):
+    browser.get(server)
+    wait_for(browser, "return window.twv && window.twv.updates >= 1")
+    browser.find_element("id", "tune").click()
+    tuned = wait_for(browser, "return window.twv.tuned")
+    out = twv("tune", "--json")
+    assert out.returncode == 0, out.stderr
+    certificate = json.loads(out.stdout)["result"]["certificate"]["gains"]
+    assert tuned == certificate
+    # The sliders moved to the certificate (to their 10-unit steps) and the page redrew there.
+    for name in ("kp", "kd"):
+        value = float(
+            browser.execute_script(f"return document.getElementById('{name}').value")
+        )
+        assert math.isclose(value, certificate[name], abs_tol=5.0), (
+            name,
+            value,
+            certificate,
+        )
+    wait_for(
+        browser,
+        "return window.twv.gains.kd == Number(document.getElementById('kd').value)",
+    )
