@@ -127,7 +127,19 @@ fn answer(state: &State, mut request: tiny_http::Request) {
         match read {
             Err(e) => Reply::error(400, format!("request body: {e}")),
             Ok(n) if n > limits::MAX_BODY => Reply::too_large_body(n),
-            Ok(_) => respond(state, &method, &url, &body),
+            // A defect in a job must cost that request (a 500 with the reason), not the
+            // worker thread: the server keeps answering.
+            Ok(_) => std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                respond(state, &method, &url, &body)
+            }))
+            .unwrap_or_else(|panic| {
+                let reason = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "unknown".into());
+                Reply::error(500, format!("internal error (a defect of twv): {reason}"))
+            }),
         }
     };
     let header =

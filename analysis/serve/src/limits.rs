@@ -3,7 +3,7 @@
 //! seconds: a request over a limit is refused with the limit named, not started.
 
 use serde::Serialize;
-use twv_analysis::api::{SimSettings, SpectrumSettings, SweepSettings, TuneSettings};
+use twv_analysis::api::{SimSettings, SweepSettings, TuneSettings};
 use twv_analysis::control::RunSettings;
 use twv_analysis::lyapunov::IntegratorChoice;
 
@@ -68,6 +68,14 @@ fn over(field: &str, asked: f64, limit: f64) -> Refusal {
     format!("{field}: {asked} is over this server's limit of {limit}")
 }
 
+/// `asked` ≤ `limit`, or the refusal naming `field`.
+fn at_most(field: &str, asked: f64, limit: f64) -> Result<(), Refusal> {
+    if asked > limit {
+        return Err(over(field, asked, limit));
+    }
+    Ok(())
+}
+
 /// Steps to integrate `span` seconds with `integrator` (an adaptive one at its smallest step).
 fn steps(span: f64, integrator: &IntegratorChoice) -> f64 {
     let h = match integrator {
@@ -78,9 +86,7 @@ fn steps(span: f64, integrator: &IntegratorChoice) -> f64 {
 }
 
 fn check_steps(field: &str, span: f64, integrator: &IntegratorChoice) -> Result<(), Refusal> {
-    if span > MAX_HORIZON {
-        return Err(over(field, span, MAX_HORIZON));
-    }
+    at_most(field, span, MAX_HORIZON)?;
     let n = steps(span, integrator);
     // NaN or a zero step: let the library name it (validated after these bounds).
     if n.is_finite() && n > MAX_STEPS {
@@ -95,23 +101,16 @@ fn check_steps(field: &str, span: f64, integrator: &IntegratorChoice) -> Result<
 /// A run's horizon, steps and samples.
 pub fn run(field: &str, r: &RunSettings) -> Result<(), Refusal> {
     check_steps(&format!("{field}.t_end"), r.t_end, &r.integrator)?;
-    let samples = r.t_end / r.sample;
-    if samples.is_finite() && samples > MAX_SAMPLES {
-        return Err(over(
-            &format!("{field}.sample (samples)"),
-            samples,
-            MAX_SAMPLES,
-        ));
-    }
-    Ok(())
+    at_most(
+        &format!("{field}.sample (samples)"),
+        r.t_end / r.sample,
+        MAX_SAMPLES,
+    )
 }
 
 /// An initial tilt (a NaN is left to the library to name).
 pub fn tilt(field: &str, value: f64) -> Result<(), Refusal> {
-    if value.abs() > MAX_TILT {
-        return Err(over(field, value, MAX_TILT));
-    }
-    Ok(())
+    at_most(&format!("{field} (its size)"), value.abs(), MAX_TILT)
 }
 
 /// A simulation.
@@ -122,49 +121,25 @@ pub fn simulate(s: &SimSettings) -> Result<(), Refusal> {
 
 /// A phase portrait: its runs and the number of tilts.
 pub fn phase(run_settings: &RunSettings, tilts: &[f64]) -> Result<(), Refusal> {
-    if tilts.len() > MAX_TILTS {
-        return Err(over("settings.tilts", tilts.len() as f64, MAX_TILTS as f64));
-    }
+    at_most("settings.tilts", tilts.len() as f64, MAX_TILTS as f64)?;
     for t in tilts {
         tilt("settings.tilts", *t)?;
     }
     run("settings.run", run_settings)
 }
 
-/// A Lyapunov spectrum: its whole run, once.
-pub fn spectrum(s: &SpectrumSettings) -> Result<(), Refusal> {
-    let l = &s.lyapunov;
-    if s.repeat.is_some_and(|r| r > 1) {
-        return Err("settings.repeat: repeated runs are for benchmarks, not this server".into());
-    }
-    let span = l.transient + l.t_sample * l.iterations as f64;
-    check_steps(
-        "settings.lyapunov (transient + t_sample × iterations)",
-        span,
-        &l.integrator,
-    )
-}
-
 /// A map: its points, and the steps of all of them.
 pub fn map(s: &SweepSettings, points: usize) -> Result<(), Refusal> {
     tilt("settings.tilt", s.tilt)?;
-    if points > MAX_MAP_POINTS {
-        return Err(over(
-            "settings.grid (points)",
-            points as f64,
-            MAX_MAP_POINTS as f64,
-        ));
-    }
+    at_most(
+        "settings.grid (points)",
+        points as f64,
+        MAX_MAP_POINTS as f64,
+    )?;
     let m = &s.metric_settings;
     let span = (m.transient + m.t_sample * m.iterations as f64).max(m.t_end);
     let per_point = span / m.h;
-    if span > MAX_HORIZON {
-        return Err(over(
-            "settings.metric_settings (horizon)",
-            span,
-            MAX_HORIZON,
-        ));
-    }
+    at_most("settings.metric_settings (horizon)", span, MAX_HORIZON)?;
     let total = per_point * points as f64;
     if total.is_finite() && total > MAX_MAP_STEPS {
         return Err(format!(
@@ -178,27 +153,21 @@ pub fn map(s: &SweepSettings, points: usize) -> Result<(), Refusal> {
 /// A tuning.
 pub fn tune(s: &TuneSettings) -> Result<(), Refusal> {
     let n = s.spec.requirements.len();
-    if n > MAX_REQUIREMENTS {
-        return Err(over(
-            "settings.spec (requirements)",
-            n as f64,
-            MAX_REQUIREMENTS as f64,
-        ));
-    }
+    at_most(
+        "settings.spec (requirements)",
+        n as f64,
+        MAX_REQUIREMENTS as f64,
+    )?;
     let o = &s.options;
-    if o.max_iterations > MAX_TUNE_ITERATIONS {
-        return Err(over(
-            "settings.options.max_iterations",
-            o.max_iterations as f64,
-            MAX_TUNE_ITERATIONS as f64,
-        ));
-    }
-    if o.points_per_decade > MAX_TUNE_POINTS_PER_DECADE {
-        return Err(over(
-            "settings.options.points_per_decade",
-            o.points_per_decade as f64,
-            MAX_TUNE_POINTS_PER_DECADE as f64,
-        ));
-    }
+    at_most(
+        "settings.options.max_iterations",
+        o.max_iterations as f64,
+        MAX_TUNE_ITERATIONS as f64,
+    )?;
+    at_most(
+        "settings.options.points_per_decade",
+        o.points_per_decade as f64,
+        MAX_TUNE_POINTS_PER_DECADE as f64,
+    )?;
     Ok(())
 }
