@@ -166,13 +166,16 @@ function showMargins(answer) {
   draw("c-mag", mag);
   draw("c-arg", arg);
   const near = f.re.map((re, i) => ({ x: re, y: f.im[i] })).filter((p) => Math.hypot(p.x, p.y) <= 5);
-  const circle = Array.from({ length: 121 }, (_, k) => ({ x: Math.cos((k * Math.PI) / 60), y: Math.sin((k * Math.PI) / 60) }));
-  draw("c-nyquist", [
+  const circle = (c, r) => Array.from({ length: 121 }, (_, k) => ({ x: c + r * Math.cos((k * Math.PI) / 60), y: r * Math.sin((k * Math.PI) / 60) }));
+  const nyquist = [
     { label: "ω > 0", data: near },
     { label: "ω < 0", data: near.map((p) => ({ x: p.x, y: -p.y })), dash: [4, 3] },
-    { label: "|L| = 1", data: circle, color: "#999" },
+    { label: "|L| = 1", data: circle(0, 1), color: "#999" },
     { label: "−1", data: [{ x: -1, y: 0 }], line: false, color: "#d62728", pointStyle: "cross", pointRadius: 8 },
-  ]);
+  ];
+  // The disk margin's exclusion disk (from the server): L stays outside, touching it.
+  if (f.disk) nyquist.push({ label: "disk margin", data: circle(f.disk.center, f.disk.radius), color: "#9467bd", dash: [2, 2] });
+  draw("c-nyquist", nyquist);
 }
 
 function showLyapunov(answer) {

@@ -96,8 +96,18 @@ pub fn bode(title: &str, r: &LoopResponse) -> Option<Figure> {
     }))
 }
 
-/// Im L against Re L for ω > 0 and its mirror image (ω < 0), the unit circle and the critical
-/// point −1, within |L| ≤ [`NYQUIST_CLIP`]; `None` if no point is that close.
+/// The circle of `radius` about (`center`, 0), 180 segments.
+fn circle(center: f64, radius: f64) -> Vec<(f64, f64)> {
+    (0..=180)
+        .map(|k| {
+            let t = k as f64 * std::f64::consts::TAU / 180.0;
+            (center + radius * t.cos(), radius * t.sin())
+        })
+        .collect()
+}
+
+/// Im L against Re L for ω > 0 and its mirror image (ω < 0), the unit circle, the critical
+/// point −1 and the disk margin's exclusion disk, within |L| ≤ [`NYQUIST_CLIP`]; `None` if no point is that close.
 pub fn nyquist(title: &str, r: &LoopResponse) -> Option<Figure> {
     let near: Vec<(f64, f64)> =
         r.re.iter()
@@ -108,13 +118,7 @@ pub fn nyquist(title: &str, r: &LoopResponse) -> Option<Figure> {
     if near.len() < 2 {
         return None;
     }
-    let circle = (0..=180)
-        .map(|k| {
-            let t = k as f64 * std::f64::consts::TAU / 180.0;
-            (t.cos(), t.sin())
-        })
-        .collect();
-    let curves = vec![
+    let mut curves = vec![
         Curve {
             name: "L(jω), ω > 0".into(),
             points: near.clone(),
@@ -125,7 +129,7 @@ pub fn nyquist(title: &str, r: &LoopResponse) -> Option<Figure> {
         },
         Curve {
             name: "|L| = 1".into(),
-            points: circle,
+            points: circle(0.0, 1.0),
         },
         Curve {
             name: "−1".into(),
@@ -138,6 +142,12 @@ pub fn nyquist(title: &str, r: &LoopResponse) -> Option<Figure> {
             ],
         },
     ];
+    if let Some(d) = &r.disk {
+        curves.push(Curve {
+            name: "disk margin".into(),
+            points: circle(d.center, d.radius),
+        });
+    }
     Some(Figure::Line(LineChart::new(
         &format!("{title}: Nyquist (|L| ≤ {NYQUIST_CLIP})"),
         "Re L",

@@ -26,5 +26,5 @@ pub use lqr::{lqr, Lqr};
 pub use margins::{loop_margins, GridOptions, Margins};
 pub use modes::{eigenvalues, modes, spectral_abscissa, Mode, ModeKind};
 pub use pitch::{ClosedLoop, GainBasis, LoopOptions, PidGains, PitchLoop};
-pub use report::{analyse_pitch, loop_response, LoopResponse, PitchAnalysis};
+pub use report::{analyse_pitch, loop_response, ExclusionDisk, LoopResponse, PitchAnalysis};
 pub use siso::{HiddenKind, HiddenPart, SisoPlant};

@@ -71,6 +71,38 @@ pub struct LoopResponse {
     pub gain_crossovers: Vec<f64>,
     /// Where L is real and negative [rad/s] (the gain margins are read there).
     pub phase_crossovers: Vec<f64>,
+    /// The balanced disk margin's exclusion disk in the L plane (stable loops with α < 2).
+    pub disk: Option<ExclusionDisk>,
+}
+
+/// The points L must avoid for the loop to stay stable under every gain and phase change of
+/// the balanced disk of size α: {−1/f : f ∈ D(α, 0)}, the disk on the real axis between
+/// −1/gain_low and −1/gain_high. It contains −1, and L(jω) touches it at the frequency where
+/// the disk margin is attained.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ExclusionDisk {
+    /// Centre (on the real axis).
+    pub center: f64,
+    /// Radius.
+    pub radius: f64,
+    /// Where L touches it [rad/s].
+    pub frequency: f64,
+}
+
+impl ExclusionDisk {
+    /// The disk of a stable loop's disk margin; `None` for an unstable loop or α ≥ 2 (then the
+    /// region is a half-plane or more).
+    pub fn of(margins: &Margins) -> Option<Self> {
+        let d = &margins.disk;
+        (margins.stable && d.alpha > 0.0 && d.alpha < 2.0).then(|| {
+            let (far, near) = (-1.0 / d.gain_low, -1.0 / d.gain_high);
+            Self {
+                center: 0.5 * (far + near),
+                radius: 0.5 * (near - far),
+                frequency: d.frequency,
+            }
+        })
+    }
 }
 
 /// L(jω) of `lp` at `points` log-spaced frequencies two decades either side of the loop's
@@ -94,6 +126,7 @@ pub fn loop_response(
         phase_deg: Vec::with_capacity(n),
         gain_crossovers: analysis.margins.gain_crossovers.clone(),
         phase_crossovers: analysis.margins.phase_crossovers.clone(),
+        disk: ExclusionDisk::of(&analysis.margins),
     };
     for k in 0..n {
         let w = lo * (hi / lo).powf(k as f64 / (n - 1) as f64);

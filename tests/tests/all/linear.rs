@@ -621,6 +621,21 @@ fn frequency_response_is_the_closed_form_and_its_nyquist_count_matches_the_eigen
                 assert!(r.w[i] > r.w[i - 1]);
             }
         }
+        // A stable loop's L stays outside its disk margin's exclusion disk and touches it
+        // (to the grid's resolution) where the margin is attained: the golden-section search
+        // of the margins and the response grid agree.
+        if let Some(d) = &r.disk {
+            let gap = (0..r.w.len())
+                .map(|i| Complex::new(r.re[i] - d.center, r.im[i]).norm() - d.radius)
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                gap > -1e-9 * d.radius && gap < 1e-3 * d.radius,
+                "gap {gap}, {d:?}"
+            );
+            assert!(d.center - d.radius < -1.0 && -1.0 < d.center + d.radius);
+        } else {
+            assert!(!an.closed_loop.stable);
+        }
         // Half-turns of 1 + L for ω from 0⁺ to ∞; the mirror image doubles them.
         let turn: f64 = (1..r.w.len())
             .map(|i| {
