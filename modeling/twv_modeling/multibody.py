@@ -33,6 +33,7 @@ from .kinematics import (
     inertia_matrix,
     vec3,
 )
+from .canonical import canonical
 from .linsolve import solve_spd
 from .params import Param
 
@@ -397,10 +398,16 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
 
     # Merging common subexpressions also cancels exact repeats (a - a = 0), so entries that
     # vanish identically, such as the left/right wheel cross terms, become structural zeros.
-    M = ca.cse(M_c)
-    Cp = ca.cse(Cp_c)
-    F = ca.cse(F_c)
-    Q = ca.cse(Q_c)
+    # Then each entry in the form a careful person writes (canonical.py: sin² + cos² = 1,
+    # cancelling pairs gone, parameter coefficients factored), where that has fewer operations.
+    names = [p_vec[i].name() for i in range(p_vec.numel())]
+    params = set(names)
+    env = {e.name(): e for e in [*q.values(), *pf.values(), *u.values(), *cspeed.values()]}
+    env.update({n: p_vec[i] for i, n in enumerate(names)})
+    M = canonical(ca.cse(M_c), params, env)
+    Cp = canonical(ca.cse(Cp_c), params, env)
+    F = canonical(ca.cse(F_c), params, env)
+    Q = canonical(ca.cse(Q_c), params, env)
     energy = ca.cse(energy_c)
     momentum = ca.cse(momentum_c)
 
@@ -417,7 +424,7 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
     p_ind = p_new[:m]
     rows = [coord_names.index(c) for c in state_coords]
     qdot_state = ca.vertcat(*[qdot[r] for r in rows])
-    pdot = solve_spd(M, Q - Cp - F)
+    pdot = solve_spd(M, canonical(ca.cse(Q - Cp - F), params, env))
     x = ca.vertcat(*[q[c] for c in state_coords], p_ind)
 
     states = [c for c in system.coordinates if c.name in state_coords] + [

@@ -1,0 +1,165 @@
+"""Canonical forms of the derived coefficients: what a careful person writes by hand.
+
+The Hamel derivation builds M, C p, F and Q as CasADi expressions straight from the body
+kinematics, and CasADi does not simplify: the pendulum's mass-matrix entry comes out as
+m2 (b² cos²φ + b² sin²φ) + I2_yy, and C p carries products that cancel in pairs. Each entry is
+rewritten here as a polynomial in the state, the inputs and the sine and cosine of each angle,
+reduced by sin² + cos² = 1, its terms grouped by their state monomial with the parameter
+coefficients factored — m2 b² + I2_yy, (I2_xx − I2_zz + m2 b²) w_z² sin φ cos φ — using sympy
+for the algebra. An entry is only replaced when the rewrite has fewer operations; entries too
+large to expand cheaply (the bicycle's) are kept as derived. The rewrite is exact algebra, so
+the values agree to rounding (the modeling tests compare every model with its other routes).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import sympy as sp
+
+# Entries with more expression nodes than this are left as derived: expanding products of sums
+# explodes (a 384-node entry of the bicycle did not finish in minutes; vehicle8's largest has 51).
+MAX_NODES = 150
+# ... and so are those whose expansion has more terms than this.
+MAX_TERMS = 400
+
+_UNARY = {
+    ca.OP_NEG: lambda a: -a,
+    ca.OP_SIN: sp.sin,
+    ca.OP_COS: sp.cos,
+    ca.OP_SQ: lambda a: a**2,
+    ca.OP_SQRT: sp.sqrt,
+    ca.OP_TWICE: lambda a: 2 * a,
+}
+_BINARY = {
+    ca.OP_ADD: lambda a, b: a + b,
+    ca.OP_SUB: lambda a, b: a - b,
+    ca.OP_MUL: lambda a, b: a * b,
+    ca.OP_DIV: lambda a, b: a / b,
+}
+
+
+class _Unsupported(Exception):
+    """An operation the rewrite does not handle: the entry is kept as derived."""
+
+
+def _to_sympy(e: ca.SX, memo: dict[int, sp.Expr]) -> sp.Expr:
+    """`e` as sympy, each shared node converted once (`memo` by node identity: a walk of the
+    tree instead of the graph would unfold shared subexpressions exponentially)."""
+    key = e.element_hash()
+    if key in memo:
+        return memo[key]
+    if e.is_symbolic():
+        out = sp.Symbol(e.name())
+    elif e.is_constant():
+        v = float(e)
+        out = sp.Integer(int(v)) if v.is_integer() else sp.Float(v)
+    else:
+        op = e.op()
+        args = [_to_sympy(e.dep(i), memo) for i in range(e.n_dep())]
+        if op in _UNARY and len(args) == 1:
+            out = _UNARY[op](args[0])
+        elif op in _BINARY and len(args) == 2:
+            out = _BINARY[op](*args)
+        else:
+            raise _Unsupported(op)
+    memo[key] = out
+    return out
+
+
+def _to_casadi(x: sp.Expr, env: dict[str, ca.SX]) -> ca.SX:
+    if x.is_Symbol:
+        return env[x.name]
+    if x.is_Number:
+        return ca.SX(float(x))
+    if x.is_Add or x.is_Mul:
+        out = _to_casadi(x.args[0], env)
+        for a in x.args[1:]:
+            out = out + _to_casadi(a, env) if x.is_Add else out * _to_casadi(a, env)
+        return out
+    if x.is_Pow:
+        base, n = x.args
+        b = _to_casadi(base, env)
+        if n.is_Integer and n > 0:
+            out = b
+            for _ in range(int(n) - 1):
+                out = out * b
+            return out
+        if n == -1:
+            return 1 / b
+        if n == sp.Rational(1, 2):
+            return ca.sqrt(b)
+        raise _Unsupported(x)
+    if isinstance(x, sp.sin):
+        return ca.sin(_to_casadi(x.args[0], env))
+    if isinstance(x, sp.cos):
+        return ca.cos(_to_casadi(x.args[0], env))
+    raise _Unsupported(x)
+
+
+def _rewrite(x: sp.Expr, params: set[str]) -> sp.Expr | None:
+    """The canonical polynomial form of `x`, or None when it is not a polynomial in the state,
+    inputs and the trigonometric functions of plain symbols (a division by the state, say)."""
+    trig: list[tuple[sp.Symbol, sp.Symbol]] = []
+    to_trig, back = {}, {}
+    for f in sorted(x.atoms(sp.sin, sp.cos), key=sp.default_sort_key):
+        arg = f.args[0]
+        if not arg.is_Symbol:
+            return None
+        s, c = sp.Symbol(f"_sin_{arg.name}"), sp.Symbol(f"_cos_{arg.name}")
+        if (s, c) not in trig:
+            trig.append((s, c))
+            to_trig.update({sp.sin(arg): s, sp.cos(arg): c})
+            back.update({s: sp.sin(arg), c: sp.cos(arg)})
+    x = sp.expand(x.xreplace(to_trig))
+    if x.is_Add and len(x.args) > MAX_TERMS:
+        return None
+    free = sorted((s for s in x.free_symbols if s.name not in params), key=sp.default_sort_key)
+    trig_syms = [t for pair in trig for t in pair]
+    states = [s for s in free if s not in trig_syms]
+    gens = states + [t for t in trig_syms if x.has(t)]
+    if not gens:
+        return sp.factor(x)
+    if not x.is_polynomial(*gens):
+        return None
+    # sin² = 1 − cos², angle by angle: the remainder has each sine to the first power at most.
+    for s, c in trig:
+        if x.has(s):
+            x = sp.expand(sp.rem(x, s**2 + c**2 - 1, s))
+    poly = sp.Poly(x, *gens)
+    n = len(states)
+    groups: dict[tuple[int, ...], sp.Expr] = {}
+    for monom, coeff in poly.terms():
+        trig_part = sp.Mul(*[g**k for g, k in zip(gens[n:], monom[n:])])
+        groups[monom[:n]] = groups.get(monom[:n], sp.Integer(0)) + coeff * trig_part
+    out = sp.Integer(0)
+    for monom, inner in groups.items():
+        inner = sp.collect(sp.expand(inner), gens[n:], func=sp.factor)
+        out += sp.Mul(*[g**k for g, k in zip(gens[:n], monom)]) * inner
+    return out.xreplace(back)
+
+
+def canonical_entry(e: ca.SX, params: set[str], env: dict[str, ca.SX]) -> ca.SX:
+    """`e` rewritten (see the module doc) when that has fewer operations, else `e`."""
+    if e.nnz() == 0 or e.is_zero() or e.is_constant() or e.is_symbolic():
+        return e
+    if ca.n_nodes(e) > MAX_NODES:
+        return e
+    try:
+        rewritten = _rewrite(_to_sympy(e, {}), params)
+        if rewritten is None:
+            return e
+        out = ca.cse(_to_casadi(rewritten, env))
+    except _Unsupported:
+        return e
+    return out if ca.n_nodes(out) < ca.n_nodes(ca.cse(e)) else e
+
+
+def canonical(m: ca.SX, params: set[str], env: dict[str, ca.SX]) -> ca.SX:
+    """Every entry of the matrix `m` through [`canonical_entry`]; structural zeros stay."""
+    out = ca.SX(m.size1(), m.size2())
+    for i in range(m.size1()):
+        for j in range(m.size2()):
+            e = m[i, j]
+            if not (e.nnz() == 0 or e.is_zero()):
+                out[i, j] = canonical_entry(e, params, env)
+    return out
