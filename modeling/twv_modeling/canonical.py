@@ -38,7 +38,7 @@ _BINARY = {
 }
 
 
-class _Unsupported(Exception):
+class _UnsupportedError(Exception):
     """An operation the rewrite does not handle: the entry is kept as derived."""
 
 
@@ -61,7 +61,7 @@ def _to_sympy(e: ca.SX, memo: dict[int, sp.Expr]) -> sp.Expr:
         elif op in _BINARY and len(args) == 2:
             out = _BINARY[op](*args)
         else:
-            raise _Unsupported(op)
+            raise _UnsupportedError(op)
     memo[key] = out
     return out
 
@@ -88,12 +88,12 @@ def _to_casadi(x: sp.Expr, env: dict[str, ca.SX]) -> ca.SX:
             return 1 / b
         if n == sp.Rational(1, 2):
             return ca.sqrt(b)
-        raise _Unsupported(x)
+        raise _UnsupportedError(x)
     if isinstance(x, sp.sin):
         return ca.sin(_to_casadi(x.args[0], env))
     if isinstance(x, sp.cos):
         return ca.cos(_to_casadi(x.args[0], env))
-    raise _Unsupported(x)
+    raise _UnsupportedError(x)
 
 
 def _rewrite(x: sp.Expr, params: set[str]) -> sp.Expr | None:
@@ -129,12 +129,12 @@ def _rewrite(x: sp.Expr, params: set[str]) -> sp.Expr | None:
     n = len(states)
     groups: dict[tuple[int, ...], sp.Expr] = {}
     for monom, coeff in poly.terms():
-        trig_part = sp.Mul(*[g**k for g, k in zip(gens[n:], monom[n:])])
+        trig_part = sp.Mul(*[g**k for g, k in zip(gens[n:], monom[n:], strict=True)])
         groups[monom[:n]] = groups.get(monom[:n], sp.Integer(0)) + coeff * trig_part
     out = sp.Integer(0)
     for monom, inner in groups.items():
         inner = sp.collect(sp.expand(inner), gens[n:], func=sp.factor)
-        out += sp.Mul(*[g**k for g, k in zip(gens[:n], monom)]) * inner
+        out += sp.Mul(*[g**k for g, k in zip(gens[:n], monom, strict=True)]) * inner
     return out.xreplace(back)
 
 
@@ -149,7 +149,7 @@ def canonical_entry(e: ca.SX, params: set[str], env: dict[str, ca.SX]) -> ca.SX:
         if rewritten is None:
             return e
         out = ca.cse(_to_casadi(rewritten, env))
-    except _Unsupported:
+    except _UnsupportedError:
         return e
     return out if ca.n_nodes(out) < ca.n_nodes(ca.cse(e)) else e
 

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from .canonical import canonical
 from .derived import DerivedModel, Signal
 from .kinematics import (
     Body,
@@ -33,7 +34,6 @@ from .kinematics import (
     inertia_matrix,
     vec3,
 )
-from .canonical import canonical
 from .linsolve import solve_spd
 from .params import Param
 
