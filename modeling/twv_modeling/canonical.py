@@ -13,8 +13,13 @@ the values agree to rounding (the modeling tests compare every model with its ot
 
 from __future__ import annotations
 
+import functools
+from typing import TYPE_CHECKING
+
 import casadi as ca
-import sympy as sp
+
+if TYPE_CHECKING:
+    import sympy as sp
 
 # Entries with more expression nodes than this are left as derived: expanding products of sums
 # explodes (a 384-node entry of the bicycle did not finish in minutes; vehicle8's largest has 51).
@@ -22,20 +27,28 @@ MAX_NODES = 150
 # ... and so are those whose expansion has more terms than this.
 MAX_TERMS = 400
 
-_UNARY = {
-    ca.OP_NEG: lambda a: -a,
-    ca.OP_SIN: sp.sin,
-    ca.OP_COS: sp.cos,
-    ca.OP_SQ: lambda a: a**2,
-    ca.OP_SQRT: sp.sqrt,
-    ca.OP_TWICE: lambda a: 2 * a,
-}
-_BINARY = {
-    ca.OP_ADD: lambda a, b: a + b,
-    ca.OP_SUB: lambda a, b: a - b,
-    ca.OP_MUL: lambda a, b: a * b,
-    ca.OP_DIV: lambda a, b: a / b,
-}
+
+@functools.cache
+def _sympy():
+    """sympy and CasADi's operations in it, imported on first use: `import sympy` takes ~2 s,
+    which every `python -m twv_modeling` run that derives no multibody model would pay."""
+    import sympy
+
+    unary = {
+        ca.OP_NEG: lambda a: -a,
+        ca.OP_SIN: sympy.sin,
+        ca.OP_COS: sympy.cos,
+        ca.OP_SQ: lambda a: a**2,
+        ca.OP_SQRT: sympy.sqrt,
+        ca.OP_TWICE: lambda a: 2 * a,
+    }
+    binary = {
+        ca.OP_ADD: lambda a, b: a + b,
+        ca.OP_SUB: lambda a, b: a - b,
+        ca.OP_MUL: lambda a, b: a * b,
+        ca.OP_DIV: lambda a, b: a / b,
+    }
+    return sympy, unary, binary
 
 
 class _UnsupportedError(Exception):
@@ -45,6 +58,7 @@ class _UnsupportedError(Exception):
 def _to_sympy(e: ca.SX, memo: dict[int, sp.Expr]) -> sp.Expr:
     """`e` as sympy, each shared node converted once (`memo` by node identity: a walk of the
     tree instead of the graph would unfold shared subexpressions exponentially)."""
+    sp, unary, binary = _sympy()
     key = e.element_hash()
     if key in memo:
         return memo[key]
@@ -56,10 +70,10 @@ def _to_sympy(e: ca.SX, memo: dict[int, sp.Expr]) -> sp.Expr:
     else:
         op = e.op()
         args = [_to_sympy(e.dep(i), memo) for i in range(e.n_dep())]
-        if op in _UNARY and len(args) == 1:
-            out = _UNARY[op](args[0])
-        elif op in _BINARY and len(args) == 2:
-            out = _BINARY[op](*args)
+        if op in unary and len(args) == 1:
+            out = unary[op](args[0])
+        elif op in binary and len(args) == 2:
+            out = binary[op](*args)
         else:
             raise _UnsupportedError(op)
     memo[key] = out
@@ -67,6 +81,7 @@ def _to_sympy(e: ca.SX, memo: dict[int, sp.Expr]) -> sp.Expr:
 
 
 def _to_casadi(x: sp.Expr, env: dict[str, ca.SX]) -> ca.SX:
+    sp = _sympy()[0]
     if x.is_Symbol:
         return env[x.name]
     if x.is_Number:
@@ -99,6 +114,7 @@ def _to_casadi(x: sp.Expr, env: dict[str, ca.SX]) -> ca.SX:
 def _rewrite(x: sp.Expr, params: set[str]) -> sp.Expr | None:
     """The canonical polynomial form of `x`, or None when it is not a polynomial in the state,
     inputs and the trigonometric functions of plain symbols (a division by the state, say)."""
+    sp = _sympy()[0]
     trig: list[tuple[sp.Symbol, sp.Symbol]] = []
     to_trig, back = {}, {}
     for f in sorted(x.atoms(sp.sin, sp.cos), key=sp.default_sort_key):
