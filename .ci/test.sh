@@ -65,6 +65,11 @@ fi
 ( bash .ci/slurm-test.sh target/debug/twv >target/slurm-test.log 2>&1 ) &
 slurm_pid=$!
 
+# The browser test mostly waits on Chromium and the server: beside them too.
+step "twv serve in a real browser: headless Chromium through WebDriver (in the background)"
+( bash .ci/browser-test.sh target/debug/twv >target/browser-test.log 2>&1 ) &
+browser_pid=$!
+
 step "cargo test --doc"
 cargo test --workspace --doc --profile dev
 
@@ -73,8 +78,14 @@ step "python package: build the extension into .venv (maturin), pytest python/te
 PATH="$PWD/.venv/bin:$PATH" VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --uv --quiet -m python/Cargo.toml
 TWV_BIN="$PWD/target/debug/twv" "$py" -m pytest -q -p no:cacheprovider python/tests
 
-step "twv serve in a real browser (headless Chromium through WebDriver)"
-bash .ci/browser-test.sh target/debug/twv
+step "the browser test: the page's plots and margins are the CLI's for the dragged gains (its log)"
+browser_status=0
+wait "$browser_pid" || browser_status=$?
+cat target/browser-test.log
+if [ "$browser_status" -ne 0 ]; then
+    echo "the browser test failed (exit $browser_status)"
+    exit "$browser_status"
+fi
 
 step "the Slurm cluster test: merged shards = unsharded map (its log)"
 slurm_status=0
