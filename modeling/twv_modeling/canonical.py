@@ -80,20 +80,45 @@ def _to_sympy(e: ca.SX, memo: dict[int, sp.Expr]) -> sp.Expr:
     return out
 
 
-def _to_casadi(x: sp.Expr, env: dict[str, ca.SX]) -> ca.SX:
+def _product(x: sp.Expr, env: dict[str, ca.SX], params: set[str]) -> ca.SX:
+    """A product with its parameter factors first — each distinct one once, in name order, then
+    the repeats — then the number, then the rest: `b m2` is one node that every entry shares,
+    and `m2 b²` is `(b m2) b`."""
+    distinct, repeats, number, rest = [], [], [], []
+    for a in x.args:
+        base, n = a.as_base_exp()
+        if a.is_Number:
+            number.append(a)
+        elif base.is_Symbol and base.name in params and n.is_Integer and n > 0:
+            distinct.append(base.name)
+            repeats += [base.name] * (int(n) - 1)
+        else:
+            rest.append(a)
+    factors = [env[n] for n in sorted(distinct) + sorted(repeats)]
+    factors += [ca.SX(float(v)) for v in number]
+    factors += [_to_casadi(a, env, params) for a in rest]
+    out = factors[0]
+    for f in factors[1:]:
+        out = out * f
+    return out
+
+
+def _to_casadi(x: sp.Expr, env: dict[str, ca.SX], params: set[str]) -> ca.SX:
     sp = _sympy()[0]
     if x.is_Symbol:
         return env[x.name]
     if x.is_Number:
         return ca.SX(float(x))
-    if x.is_Add or x.is_Mul:
-        out = _to_casadi(x.args[0], env)
+    if x.is_Mul:
+        return _product(x, env, params)
+    if x.is_Add:
+        out = _to_casadi(x.args[0], env, params)
         for a in x.args[1:]:
-            out = out + _to_casadi(a, env) if x.is_Add else out * _to_casadi(a, env)
+            out = out + _to_casadi(a, env, params)
         return out
     if x.is_Pow:
         base, n = x.args
-        b = _to_casadi(base, env)
+        b = _to_casadi(base, env, params)
         if n.is_Integer and n > 0:
             out = b
             for _ in range(int(n) - 1):
@@ -105,9 +130,9 @@ def _to_casadi(x: sp.Expr, env: dict[str, ca.SX]) -> ca.SX:
             return ca.sqrt(b)
         raise _UnsupportedError(x)
     if isinstance(x, sp.sin):
-        return ca.sin(_to_casadi(x.args[0], env))
+        return ca.sin(_to_casadi(x.args[0], env, params))
     if isinstance(x, sp.cos):
-        return ca.cos(_to_casadi(x.args[0], env))
+        return ca.cos(_to_casadi(x.args[0], env, params))
     raise _UnsupportedError(x)
 
 
@@ -164,10 +189,11 @@ def canonical_entry(e: ca.SX, params: set[str], env: dict[str, ca.SX]) -> ca.SX:
         rewritten = _rewrite(_to_sympy(e, {}), params)
         if rewritten is None:
             return e
-        out = ca.cse(_to_casadi(rewritten, env))
+        out = ca.cse(_to_casadi(rewritten, env, params))
     except _UnsupportedError:
         return e
-    return out if ca.n_nodes(out) < ca.n_nodes(ca.cse(e)) else e
+    # Equal size: the rewrite, whose products share their parameter factors with the others.
+    return out if ca.n_nodes(out) <= ca.n_nodes(ca.cse(e)) else e
 
 
 def canonical(m: ca.SX, params: set[str], env: dict[str, ca.SX]) -> ca.SX:
