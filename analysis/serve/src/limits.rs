@@ -3,7 +3,7 @@
 //! seconds: a request over a limit is refused with the limit named, not started.
 
 use serde::Serialize;
-use twv_analysis::api::{SimSettings, SweepSettings, TuneSettings};
+use twv_analysis::api::{LinearSettings, SimSettings, SweepSettings, TuneSettings};
 use twv_analysis::control::RunSettings;
 use twv_analysis::lyapunov::IntegratorChoice;
 
@@ -23,6 +23,8 @@ pub const MAX_TILTS: usize = 16;
 pub const MAX_MAP_POINTS: usize = 2_500;
 /// Most integration steps of one map request, all points together.
 pub const MAX_MAP_STEPS: f64 = 2.5e7;
+/// Most points of a frequency response.
+pub const MAX_FREQUENCY_POINTS: usize = 5_000;
 /// Most requirements of a tuning spec.
 pub const MAX_REQUIREMENTS: usize = 16;
 /// Most iterations and grid points per decade of a tuning.
@@ -57,9 +59,6 @@ pub const LIMITS: Limits = Limits {
     max_requirements: MAX_REQUIREMENTS,
     max_frequency_points: MAX_FREQUENCY_POINTS,
 };
-
-/// Most points of a frequency response.
-pub const MAX_FREQUENCY_POINTS: usize = 5_000;
 
 /// A request over a limit: the field, what it asks, the limit.
 pub type Refusal = String;
@@ -148,6 +147,15 @@ pub fn map(s: &SweepSettings, points: usize) -> Result<(), Refusal> {
         ));
     }
     Ok(())
+}
+
+/// A linear analysis: the points of its frequency response.
+pub fn margins(s: &LinearSettings) -> Result<(), Refusal> {
+    at_most(
+        "settings.frequency_points",
+        s.frequency_points as f64,
+        MAX_FREQUENCY_POINTS as f64,
+    )
 }
 
 /// A tuning.

@@ -10,6 +10,7 @@
 //! are `{"error": "…"}` with 400 (malformed), 404, 405, 413 (body or work over a limit) or 422
 //! (refused by the library's validation, or the run failed).
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -86,16 +87,24 @@ impl Reply {
     }
 }
 
-/// The API's endpoints with their method.
-pub const ENDPOINTS: [(&str, &str); 7] = [
-    ("GET", "/api/model"),
-    ("POST", "/api/simulate"),
-    ("POST", "/api/phase"),
-    ("POST", "/api/margins"),
-    ("POST", "/api/lyapunov"),
-    ("POST", "/api/map"),
-    ("POST", "/api/tune"),
+/// What answers an endpoint: the state and the request body to the job's answer.
+type Handler = fn(&State, &[u8]) -> Answer;
+
+/// The API's endpoints: method, path, and what answers it.
+const ROUTES: [(&str, &str, Handler); 7] = [
+    ("GET", "/api/model", model_info),
+    ("POST", "/api/simulate", simulate),
+    ("POST", "/api/phase", phase),
+    ("POST", "/api/margins", margins),
+    ("POST", "/api/lyapunov", lyapunov),
+    ("POST", "/api/map", map),
+    ("POST", "/api/tune", tune),
 ];
+
+/// The API's endpoints with their method.
+pub fn endpoints() -> impl Iterator<Item = (&'static str, &'static str)> {
+    ROUTES.iter().map(|(method, path, _)| (*method, *path))
+}
 
 /// Answers one request.
 pub fn respond(state: &State, method: &str, url: &str, body: &[u8]) -> Reply {
@@ -110,29 +119,19 @@ pub fn respond(state: &State, method: &str, url: &str, body: &[u8]) -> Reply {
             _ => not_allowed(method, path, "GET"),
         };
     }
-    let Some((expected, _)) = ENDPOINTS.iter().find(|(_, p)| *p == path) else {
+    let Some((expected, _, handler)) = ROUTES.iter().find(|(_, p, _)| *p == path) else {
         return Reply::error(404, format!("{path}: no such page or endpoint"));
     };
     if method != *expected {
         return not_allowed(method, path, expected);
     }
     let started = Instant::now();
-    let answer = match path {
-        "/api/model" => model_info(&state.model),
-        "/api/simulate" => simulate(state, body),
-        "/api/phase" => phase(state, body),
-        "/api/margins" => margins(state, body),
-        "/api/lyapunov" => lyapunov(state, body),
-        "/api/map" => map(state, body),
-        "/api/tune" => tune(state, body),
-        _ => unreachable!("every endpoint is routed"),
-    };
-    match answer {
-        Ok((result, extra)) => {
+    match handler(state, body) {
+        Ok((result, series)) => {
             let ms = started.elapsed().as_secs_f64() * 1e3;
             Reply::json(format!(
                 "{{\"server_ms\":{ms:.3},\"result\":{result}{}}}",
-                extra.map_or(String::new(), |e| format!(",{e}"))
+                series.map_or(String::new(), |e| format!(",\"series\":{e}"))
             ))
         }
         Err(reply) => reply,
@@ -143,7 +142,8 @@ fn not_allowed(method: &str, path: &str, allowed: &str) -> Reply {
     Reply::error(405, format!("{method} {path}: use {allowed}"))
 }
 
-/// A job's result as JSON and an optional extra member (`"series": …`), or the error reply.
+/// A job's result as JSON and, for a run, its samples (the answer's `"series"`), or the error
+/// reply.
 type Answer = Result<(String, Option<String>), Reply>;
 
 /// A request body: parameters by IR name, and the job's settings.
@@ -155,11 +155,11 @@ struct Request<S> {
     settings: Option<S>,
 }
 
-/// The body read, with the model the parameters make.
-fn request<S: DeserializeOwned>(
-    state: &State,
+/// The body read, with the model the parameters make (the server's own, borrowed, without any).
+fn request<'a, S: DeserializeOwned>(
+    state: &'a State,
     body: &[u8],
-) -> Result<(ResolvedModel, Option<S>), Reply> {
+) -> Result<(Cow<'a, ResolvedModel>, Option<S>), Reply> {
     let text = if body.iter().all(u8::is_ascii_whitespace) {
         "{}"
     } else {
@@ -179,13 +179,15 @@ fn request<S: DeserializeOwned>(
         .end()
         .map_err(|e| Reply::error(400, format!("body: {e}")))?;
     let model = if r.params.is_empty() {
-        state.model.clone()
+        Cow::Borrowed(&state.model)
     } else {
         let values: Vec<(String, f64)> = r.params.into_iter().collect();
-        state
-            .model
-            .with_param_values(&values, "the page")
-            .map_err(|e| Reply::error(422, e.to_string()))?
+        Cow::Owned(
+            state
+                .model
+                .with_param_values(&values, "the page")
+                .map_err(|e| Reply::error(422, e.to_string()))?,
+        )
     };
     Ok((model, r.settings))
 }
@@ -205,7 +207,8 @@ fn to_json<T: Serialize>(value: &T) -> Result<String, Reply> {
 
 /// The model the server runs: its parameters (name, key, unit, value, description), states,
 /// inputs, the jobs' default settings and the limits.
-fn model_info(model: &ResolvedModel) -> Answer {
+fn model_info(state: &State, _body: &[u8]) -> Answer {
+    let model = &state.model;
     #[derive(Serialize)]
     struct Param<'a> {
         name: &'a str,
@@ -269,7 +272,7 @@ fn series(columns: &[String], rows: &[Vec<f64>]) -> Result<String, Reply> {
         .enumerate()
         .map(|(j, name)| (name.as_str(), rows.iter().map(|r| r[j]).collect()))
         .collect();
-    Ok(format!("\"series\":{}", to_json(&by_column)?))
+    to_json(&by_column)
 }
 
 fn simulate(state: &State, body: &[u8]) -> Answer {
@@ -336,22 +339,13 @@ fn phase(state: &State, body: &[u8]) -> Answer {
             phi_dot: run.points.iter().map(|p| p.1).collect(),
         })
         .collect();
-    Ok((
-        to_json(&r)?,
-        Some(format!("\"series\":{}", to_json(&runs)?)),
-    ))
+    Ok((to_json(&r)?, Some(to_json(&runs)?)))
 }
 
 fn margins(state: &State, body: &[u8]) -> Answer {
     let (model, s) = request::<LinearSettings>(state, body)?;
     let s = s.unwrap_or_default();
-    if s.frequency_points > limits::MAX_FREQUENCY_POINTS {
-        return Err(refused(format!(
-            "settings.frequency_points: {} is over this server's limit of {}",
-            s.frequency_points,
-            limits::MAX_FREQUENCY_POINTS
-        )));
-    }
+    limits::margins(&s).map_err(refused)?;
     let r = api::analyse(&model, &s).map_err(failed)?;
     Ok((to_json(&r)?, None))
 }

@@ -9,7 +9,7 @@ use serde_json::{json, Value};
 use twv_analysis::api::{self, LinearSettings, Silent, SimSettings, TuneSettings};
 use twv_analysis::model::{ModelSpec, ResolvedModel};
 use twv_analysis::sweep::{PointResult, Status};
-use twv_serve::routes::{exponent_verdict, ExponentVerdict, LyapunovRequest, ENDPOINTS};
+use twv_serve::routes::{endpoints, exponent_verdict, ExponentVerdict, LyapunovRequest};
 use twv_serve::{respond, CancelFlag, ServeSettings, Server, State};
 
 fn model() -> ResolvedModel {
@@ -198,7 +198,7 @@ fn malformed_requests_get_400_with_a_reason() {
     assert_eq!(respond(&state, "DELETE", "/", b"").status, 405);
     assert_eq!(respond(&state, "GET", "/etc/passwd", b"").status, 404);
     assert_eq!(respond(&state, "GET", "/../Cargo.toml", b"").status, 404);
-    for (method, path) in ENDPOINTS {
+    for (method, path) in endpoints() {
         assert_ne!(respond(&state, method, path, b"").status, 404, "{path}");
     }
     let page = respond(&state, "GET", "/", b"");
