@@ -4,6 +4,16 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 step() { printf '\n== %s  [%ds]\n' "$*" "$SECONDS"; }
+# Waits for a test started in the background, prints its log, and stops here if it failed.
+finish() { # NAME PID LOG
+    local status=0
+    wait "$2" || status=$?
+    cat "$3"
+    if [ "$status" -ne 0 ]; then
+        echo "$1 failed (exit $status)"
+        exit "$status"
+    fi
+}
 
 step "machine"
 # Which kernels the bit-for-bit ISA tests can compare here (they say so when they cannot).
@@ -79,21 +89,9 @@ PATH="$PWD/.venv/bin:$PATH" VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop -
 TWV_BIN="$PWD/target/debug/twv" "$py" -m pytest -q -p no:cacheprovider python/tests
 
 step "the browser test: the page's plots and margins are the CLI's for the dragged gains (its log)"
-browser_status=0
-wait "$browser_pid" || browser_status=$?
-cat target/browser-test.log
-if [ "$browser_status" -ne 0 ]; then
-    echo "the browser test failed (exit $browser_status)"
-    exit "$browser_status"
-fi
+finish "the browser test" "$browser_pid" target/browser-test.log
 
 step "the Slurm cluster test: merged shards = unsharded map (its log)"
-slurm_status=0
-wait "$slurm_pid" || slurm_status=$?
-cat target/slurm-test.log
-if [ "$slurm_status" -ne 0 ]; then
-    echo "the Slurm cluster test failed (exit $slurm_status)"
-    exit "$slurm_status"
-fi
+finish "the Slurm cluster test" "$slurm_pid" target/slurm-test.log
 
 step "done"

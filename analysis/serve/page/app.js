@@ -42,6 +42,7 @@ function controller() {
 }
 
 const tilt = () => (num("tilt") * Math.PI) / 180;
+const loopOptions = () => ({ lag: num("lag"), delay: num("delay") });
 
 // --- charts -----------------------------------------------------------------------------------
 
@@ -209,10 +210,9 @@ async function update() {
   const g = gains(); // what this update draws (the sliders may move while it runs)
   const c = controller();
   const body = (settings) => ({ params, settings });
-  const loop = { lag: num("lag"), delay: num("delay") };
   const jobs = {
     simulate: api("/api/simulate", body({ controller: c, phi0: tilt() })),
-    margins: api("/api/margins", body({ gains: g, loop_options: loop, frequency_points: 300 })),
+    margins: api("/api/margins", body({ gains: g, loop_options: loopOptions(), frequency_points: 300 })),
     lyapunov: api("/api/lyapunov", body({ controller: c, tilt: tilt() })),
     phase: api("/api/phase", body({ controller: c, tilts: [tilt(), -tilt(), 2 * tilt(), -2 * tilt()] })),
   };
@@ -256,6 +256,7 @@ function schedule() {
 // --- the map ---------------------------------------------------------------------------------
 
 const MAP_N = 20;
+const MAP_PAD = { l: 50, b: 30, t: 5, r: 5 }; // room for the axis labels [px]
 let map = null; // { kp: [..], kd: [..], points: [[point per kp] per kd row] }
 
 function mapAxes() {
@@ -301,8 +302,7 @@ function drawMap() {
   const g = canvas.getContext("2d");
   g.clearRect(0, 0, canvas.width, canvas.height);
   if (!map) return;
-  const pad = { l: 50, b: 30, t: 5, r: 5 };
-  const w = (canvas.width - pad.l - pad.r) / MAP_N, h = (canvas.height - pad.b - pad.t) / MAP_N;
+  const w = (canvas.width - MAP_PAD.l - MAP_PAD.r) / MAP_N, h = (canvas.height - MAP_PAD.b - MAP_PAD.t) / MAP_N;
   const values = map.rows.flat().filter((p) => p.value !== null).map((p) => Math.abs(p.value));
   const scale = Math.max(1e-9, ...values);
   map.rows.forEach((row, j) => row.forEach((p, i) => {
@@ -312,13 +312,13 @@ function drawMap() {
       color = p.value < 0 ? `rgba(31,119,180,${a})` : `rgba(214,39,40,${a})`;
     }
     g.fillStyle = color;
-    g.fillRect(pad.l + i * w, canvas.height - pad.b - (j + 1) * h, w - 1, h - 1);
+    g.fillRect(MAP_PAD.l + i * w, canvas.height - MAP_PAD.b - (j + 1) * h, w - 1, h - 1);
   }));
   g.fillStyle = "#222";
   g.font = "12px sans-serif";
-  g.fillText(`Kp 0 … ${map.kpMax} N/rad`, pad.l, canvas.height - 8);
+  g.fillText(`Kp 0 … ${map.kpMax} N/rad`, MAP_PAD.l, canvas.height - 8);
   g.save();
-  g.translate(14, canvas.height - pad.b);
+  g.translate(14, canvas.height - MAP_PAD.b);
   g.rotate(-Math.PI / 2);
   g.fillText(`Kd 0 … ${map.kdMax} N s/rad`, 0, 0);
   g.restore();
@@ -329,9 +329,8 @@ function markMap() {
   if (!map) return;
   const canvas = $("c-map");
   const g = canvas.getContext("2d");
-  const pad = { l: 50, b: 30, t: 5, r: 5 };
-  const x = pad.l + (num("kp") / map.kpMax) * (canvas.width - pad.l - pad.r);
-  const y = canvas.height - pad.b - (num("kd") / map.kdMax) * (canvas.height - pad.b - pad.t);
+  const x = MAP_PAD.l + (num("kp") / map.kpMax) * (canvas.width - MAP_PAD.l - MAP_PAD.r);
+  const y = canvas.height - MAP_PAD.b - (num("kd") / map.kdMax) * (canvas.height - MAP_PAD.b - MAP_PAD.t);
   g.strokeStyle = "#000";
   g.lineWidth = 2;
   g.beginPath();
@@ -343,9 +342,8 @@ function clickMap(event) {
   if (!map) return;
   const canvas = $("c-map");
   const rect = canvas.getBoundingClientRect();
-  const pad = { l: 50, b: 30, t: 5, r: 5 };
-  const fx = (event.clientX - rect.left - pad.l) / (canvas.width - pad.l - pad.r);
-  const fy = (canvas.height - pad.b - (event.clientY - rect.top)) / (canvas.height - pad.b - pad.t);
+  const fx = (event.clientX - rect.left - MAP_PAD.l) / (canvas.width - MAP_PAD.l - MAP_PAD.r);
+  const fy = (canvas.height - MAP_PAD.b - (event.clientY - rect.top)) / (canvas.height - MAP_PAD.b - MAP_PAD.t);
   if (fx < 0 || fx > 1 || fy < 0 || fy > 1) return;
   const i = Math.min(MAP_N - 1, Math.floor(fx * MAP_N)), j = Math.min(MAP_N - 1, Math.floor(fy * MAP_N));
   $("kp").value = map.kp[i];
@@ -360,8 +358,7 @@ async function tune() {
   $("tune").disabled = true;
   $("tune-status").textContent = "tuning…";
   try {
-    const loop = { lag: num("lag"), delay: num("delay") };
-    const answer = await api("/api/tune", { params, settings: { spec: $("spec").value, tilt: tilt(), options: { loop_options: loop } } });
+    const answer = await api("/api/tune", { params, settings: { spec: $("spec").value, tilt: tilt(), options: { loop_options: loopOptions() } } });
     const r = answer.result;
     const cert = r.result.certificate;
     $("tune-status").innerHTML = "";
