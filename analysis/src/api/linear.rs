@@ -270,7 +270,7 @@ pub fn pitch_loop<const NX: usize, const NU: usize>(
     info: &ModelInfo,
     model: &ResolvedModel,
 ) -> Result<PitchLoop> {
-    let plant = Plant::<NU>::from_info(info, |n| model.param(n))?;
+    let plant = Plant::<NU>::from_info(info, &|n| model.param(n))?;
     Ok(PitchLoop::from_linearization(lin, &plant.inputs.force)?)
 }
 

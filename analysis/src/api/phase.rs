@@ -180,7 +180,7 @@ impl ControlTask for PhaseTask<'_> {
             .iter()
             .map(|x| state_vector("x0", x, info.states))
             .collect::<Result<_>>()?;
-        let p: Plant<NU> = Plant::from_info(&info, |n| resolved.param(n))?;
+        let p: Plant<NU> = Plant::from_info(&info, &|n| resolved.param(n))?;
         let index = (p.measured.phi, p.measured.w_y);
         match self.drive {
             Drive::Closed(settings) => {

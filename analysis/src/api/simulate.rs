@@ -188,7 +188,7 @@ impl ControlTask for Sim<'_> {
             Some(x) => state_vector("x0", x, info.states)?,
             None => state_vector("x0", &resolved.rest_with("phi", s.phi0)?, info.states)?,
         };
-        let plant: Plant<NU> = Plant::from_info(&info, |n| resolved.param(n))?;
+        let plant: Plant<NU> = Plant::from_info(&info, &|n| resolved.param(n))?;
         let field = PidLoop::<_, NX, NU, NA>::new(model, &s.controller, plant)?;
         let run = run_closed_loop(&field, &x0, &s.run, self.1)?;
         let (columns, rows) = table(&field, &run);

@@ -202,7 +202,7 @@ impl ControlTask for Closed<'_> {
         resolved: &ResolvedModel,
     ) -> Result<Self::Output> {
         let x0: [f64; NX] = state_vector("x0", &self.0.x0, model.info().states)?;
-        let plant = Plant::from_info(&model.info(), |n| resolved.param(n))?;
+        let plant = Plant::from_info(&model.info(), &|n| resolved.param(n))?;
         let field = PidLoop::<_, NX, NU, NA>::new(model, self.1, plant)?;
         let xa = field.initial_state(&x0);
         let (result, timing) = timed(self.0, &field, &xa, self.2)?;

@@ -264,7 +264,7 @@ impl ControlTask for Chunk<'_> {
         {
             x0[phi] = tilt;
         }
-        let plant = Plant::from_info(&model.info(), |n| resolved.param(n))?;
+        let plant = Plant::from_info(&model.info(), &|n| resolved.param(n))?;
         let s = &self.config.settings;
         let controller_at = |index: usize| ControllerSettings {
             pitch: crate::control::PitchPid {

@@ -17,7 +17,7 @@
 //! # use twv_analysis::control::*;
 //! # fn demo<M: twv_model::Model<8, 2>>(model: &M) -> Result<(), ControlError> {
 //! let settings = ControllerSettings::default(); // the study's PD and setpoint
-//! let plant = Plant::<2>::from_info(&model.info(), |_| None)?;
+//! let plant = Plant::<2>::from_info(&model.info(), &|_| None)?;
 //! let field = PidLoop::<_, 8, 2, 8>::new(model, &settings, plant)?; // PD: no controller state
 //! let x0 = scenario::tilted::<8>(model.info().states, 0.1)?;
 //! let run = run_closed_loop(&field, &x0, &RunSettings::default(), &twv_analysis::progress::Silent)?;

@@ -316,25 +316,19 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Dopri5<F, N, K> {
     /// Weighted RMS norm of `v` with scales atol + rtol·max(|a|, |b|) over x (and the tangents
     /// when they are error-controlled).
     fn norm(&self, v: &VarState<N, K>, a: &VarState<N, K>, b: &VarState<N, K>) -> f64 {
-        let (rtol, atol) = (self.opts.rtol, self.opts.atol);
-        let term = |v: f64, a: f64, b: f64| {
-            let s = atol + rtol * a.abs().max(b.abs());
-            (v / s) * (v / s)
+        // x, then the tangents row by row: the slices' order.
+        let len = if self.opts.tangent_error_control {
+            N + N * K
+        } else {
+            N
         };
-        let mut sum = 0.0;
-        for i in 0..N {
-            sum += term(v.x[i], a.x[i], b.x[i]);
-        }
-        let mut n = N;
-        if self.opts.tangent_error_control {
-            for j in 0..K {
-                for i in 0..N {
-                    sum += term(v.w[j][i], a.w[j][i], b.w[j][i]);
-                }
-            }
-            n += N * K;
-        }
-        (sum / n.max(1) as f64).sqrt()
+        weighted_rms(
+            &v.as_slice()[..len],
+            &a.as_slice()[..len],
+            &b.as_slice()[..len],
+            self.opts.rtol,
+            self.opts.atol,
+        )
     }
 
     /// Hairer's starting step: h ≈ (0.01 / ‖f″‖-estimate)^{1/5}, capped by h_max.
@@ -412,6 +406,17 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Dopri5<F, N, K> {
         self.tmp.add_scaled(h * E6, k6);
         self.tmp.add_scaled(h * E7, k7);
     }
+}
+
+/// √(mean of (v / (atol + rtol·max(|a|, |b|)))²): one copy for every (system, K) the
+/// steppers are built for.
+fn weighted_rms(v: &[f64], a: &[f64], b: &[f64], rtol: f64, atol: f64) -> f64 {
+    let mut sum = 0.0;
+    for ((v, a), b) in v.iter().zip(a).zip(b) {
+        let s = atol + rtol * a.abs().max(b.abs());
+        sum += (v / s) * (v / s);
+    }
+    (sum / v.len().max(1) as f64).sqrt()
 }
 
 /// Which buffer a stage is evaluated at.

@@ -1,9 +1,9 @@
 //! The Benettin–QR driver.
 //!
-//! Only the integration loop is generic over the system (`N`, `K`, the stepper): everything
-//! after it — sorting, standard errors, the classification — is one non-generic function on
-//! slices ([`finish`]), so the hundreds of (model, exponent count, integrator) combinations the
-//! binary dispatches to share one copy of it.
+//! Only the integration loop is generic over the system (`N`, `K`, the stepper): what each
+//! interval records and everything after the loop — sorting, standard errors, the
+//! classification — is one non-generic [`Measurement`] on slices, so the hundreds of (model,
+//! exponent count, integrator) combinations the binary dispatches to share one copy of it.
 
 use crate::integrate::{Dopri5, Rk4, Stepper, VectorField};
 use crate::progress::{Progress, Silent};
@@ -112,83 +112,40 @@ where
     // Measurement: the log sums, the batch sums of the local exponents, and (decimated) the
     // running estimates; nothing grows with the number of intervals beyond those rows.
     let t0 = stepper.t();
-    let q0 = stepper.state().trace_integral;
-    let n = settings.iterations;
-    let batches = Batches::new(n, settings.batches);
-    let mut batch_sums = vec![0.0; batches.count * K];
-    let mut log_sums = [0.0; K];
-    let stride = n.div_ceil(MAX_RUNNING_ROWS).max(1);
-    let mut running = RunningEstimates {
-        k: K,
-        ..RunningEstimates::default()
-    };
-    if settings.record_running {
-        let rows = n.div_ceil(stride) + 1;
-        running.t.reserve(rows);
-        running.values.reserve(rows * K);
-        running.sum.reserve(rows);
-        running.mean_trace.reserve(rows);
-    }
-    let (mut max_speed, mut max_norm) = (0.0f64, 0.0f64);
+    let mut measure = Measurement::new(
+        K,
+        settings,
+        t0,
+        trace.then_some(stepper.state().trace_integral),
+    );
     let mut f = [0.0; N];
-    for i in 1..=n {
+    for i in 1..=settings.iterations {
         let t_prev = stepper.t();
         // From t0 (not accumulated) so the horizon is exactly n·T.
         stepper.advance_to(t0 + i as f64 * t_sample)?;
         let r = reorthonormalize(&mut stepper)?;
         let (t, y) = (stepper.t(), stepper.state());
-        let dt = t - t_prev;
-        let batch = batches.of(i);
-        for (k, (s, r)) in log_sums.iter_mut().zip(r.iter()).enumerate() {
-            let lr = r.ln();
-            *s += lr;
-            if let Some(b) = batch {
-                batch_sums[b * K + k] += lr / dt;
-            }
-        }
-        interval_done()?;
         stepper.field().rhs(t, &y.x, &mut f);
-        max_speed = max_speed.max(norm(&f));
-        max_norm = max_norm.max(norm(&y.x));
-        if settings.record_running && (i % stride == 0 || i == n) {
-            let elapsed = t - t0;
-            running.t.push(elapsed);
-            running.values.extend(log_sums.iter().map(|s| s / elapsed));
-            running.sum.push(log_sums.iter().sum::<f64>() / elapsed);
-            running.mean_trace.push(if trace {
-                (y.trace_integral - q0) / elapsed
-            } else {
-                f64::NAN
-            });
-        }
+        measure.interval(i, &r, t_prev, t, y.trace_integral);
+        measure.max_speed = measure.max_speed.max(norm(&f));
+        measure.max_norm = measure.max_norm.max(norm(&y.x));
+        interval_done()?;
     }
     let t_total = stepper.t() - t0;
     let y = stepper.state();
-    Ok(finish(
-        Measured {
-            log_sums: &log_sums,
-            batch_means: batch_sums.iter().map(|s| s / batches.size as f64).collect(),
-            running,
-            t_total,
-            mean_trace: trace.then(|| (y.trace_integral - q0) / t_total),
-            max_speed,
-            max_norm,
-            full_spectrum: K == N,
-        },
-        settings,
-        RunDetails {
-            t_transient: t0 - t_begin,
-            t_sample,
-            intervals: n,
-            steps: stepper.steps(),
-            full_spectrum: K == N,
-            at_equilibrium: false,
-            max_speed,
-            max_norm,
-            final_time: stepper.t(),
-            final_state: y.x.to_vec(),
-        },
-    ))
+    let details = RunDetails {
+        t_transient: t0 - t_begin,
+        t_sample,
+        intervals: settings.iterations,
+        steps: stepper.steps(),
+        full_spectrum: K == N,
+        at_equilibrium: false,
+        max_speed: measure.max_speed,
+        max_norm: measure.max_norm,
+        final_time: stepper.t(),
+        final_state: y.x.to_vec(),
+    };
+    Ok(measure.finish(t_total, y.trace_integral, K == N, settings, details))
 }
 
 /// The batches of the batch-means error: the last `count · size` of the `n` intervals cut into
@@ -221,55 +178,136 @@ impl Batches {
     }
 }
 
-/// What the integration loop measured, before sorting and judging.
-struct Measured<'a> {
+/// What the integration loop measures, interval by interval: not generic over the system, so
+/// the hundreds of (model, exponent count, integrator) drivers share one copy of it.
+struct Measurement {
     /// Σ log R_kk per tangent vector, in the stepper's order.
-    log_sums: &'a [f64],
-    /// Batch means of the local exponents, batch-major, `log_sums.len()` per batch.
-    batch_means: Vec<f64>,
+    log_sums: Vec<f64>,
+    /// Batch sums of the local exponents, batch-major, `log_sums.len()` per batch.
+    batch_sums: Vec<f64>,
+    batches: Batches,
     running: RunningEstimates,
-    t_total: f64,
-    mean_trace: Option<f64>,
+    /// Every `stride`-th interval (and the last) is a row of the running estimates.
+    stride: usize,
+    intervals: usize,
+    record_running: bool,
+    t0: f64,
+    /// ∫ tr J at t0, when the trace is integrated and checked.
+    q0: Option<f64>,
+    /// The largest |f(x)| and |x| at the interval ends (an equilibrium has no speed).
     max_speed: f64,
     max_norm: f64,
-    full_spectrum: bool,
 }
 
-/// Sorts, estimates the errors and classifies: the non-generic end of every run.
-fn finish(m: Measured, settings: &LyapunovSettings, mut details: RunDetails) -> LyapunovResult {
-    let k = m.log_sums.len();
-    let raw: Vec<f64> = m.log_sums.iter().map(|s| s / m.t_total).collect();
-    // Sort descending and carry the order through every per-exponent series.
-    let mut order: Vec<usize> = (0..k).collect();
-    order.sort_by(|&a, &b| raw[b].total_cmp(&raw[a]));
-    let exponents: Vec<f64> = order.iter().map(|&i| raw[i]).collect();
-    let mut running = m.running;
-    running.values = permute_rows(&running.values, &order);
-    let stderr: Vec<f64> = order
-        .iter()
-        .map(|&i| {
-            let column: Vec<f64> = m.batch_means.iter().skip(i).step_by(k).copied().collect();
-            stderr_of_batch_means(&column)
-        })
-        .collect();
-    let sum = exponents.iter().sum();
-    let at_equilibrium = m.max_speed * m.t_total <= 1e-9 * m.max_norm.max(1.0);
-    details.at_equilibrium = at_equilibrium;
-    let rule = SignRule::from_settings(settings, m.t_total, &exponents);
-    let (classification, signs) = classify(&exponents, &stderr, &rule, at_equilibrium);
-    LyapunovResult {
-        kaplan_yorke: kaplan_yorke(&exponents, m.full_spectrum),
-        exponents,
-        stderr,
-        significance: settings.significance,
-        zero_floor: rule.floor,
-        signs,
-        sum,
-        mean_trace: m.mean_trace,
-        classification,
-        t_total: m.t_total,
-        running,
-        details,
+impl Measurement {
+    fn new(k: usize, settings: &LyapunovSettings, t0: f64, q0: Option<f64>) -> Self {
+        let n = settings.iterations;
+        let batches = Batches::new(n, settings.batches);
+        let stride = n.div_ceil(MAX_RUNNING_ROWS).max(1);
+        let mut running = RunningEstimates {
+            k,
+            ..RunningEstimates::default()
+        };
+        if settings.record_running {
+            let rows = n.div_ceil(stride) + 1;
+            running.t.reserve(rows);
+            running.values.reserve(rows * k);
+            running.sum.reserve(rows);
+            running.mean_trace.reserve(rows);
+        }
+        Self {
+            log_sums: vec![0.0; k],
+            batch_sums: vec![0.0; batches.count * k],
+            batches,
+            running,
+            stride,
+            intervals: n,
+            record_running: settings.record_running,
+            t0,
+            q0,
+            max_speed: 0.0,
+            max_norm: 0.0,
+        }
+    }
+
+    /// Interval `i` (1-based) from `t_prev` to `t`: R's diagonal `r` and the trace integral at
+    /// `t`.
+    #[inline(never)]
+    fn interval(&mut self, i: usize, r: &[f64], t_prev: f64, t: f64, q: f64) {
+        let k = self.log_sums.len();
+        let dt = t - t_prev;
+        let batch = self.batches.of(i);
+        for (j, (s, r)) in self.log_sums.iter_mut().zip(r).enumerate() {
+            let lr = r.ln();
+            *s += lr;
+            if let Some(b) = batch {
+                self.batch_sums[b * k + j] += lr / dt;
+            }
+        }
+        if self.record_running && (i.is_multiple_of(self.stride) || i == self.intervals) {
+            let elapsed = t - self.t0;
+            let running = &mut self.running;
+            running.t.push(elapsed);
+            running
+                .values
+                .extend(self.log_sums.iter().map(|s| s / elapsed));
+            running
+                .sum
+                .push(self.log_sums.iter().sum::<f64>() / elapsed);
+            running
+                .mean_trace
+                .push(self.q0.map_or(f64::NAN, |q0| (q - q0) / elapsed));
+        }
+    }
+
+    /// Sorts, estimates the errors and classifies: the end of every run.
+    fn finish(
+        self,
+        t_total: f64,
+        q: f64,
+        full_spectrum: bool,
+        settings: &LyapunovSettings,
+        mut details: RunDetails,
+    ) -> LyapunovResult {
+        let k = self.log_sums.len();
+        let batch_means: Vec<f64> = self
+            .batch_sums
+            .iter()
+            .map(|s| s / self.batches.size as f64)
+            .collect();
+        let raw: Vec<f64> = self.log_sums.iter().map(|s| s / t_total).collect();
+        // Sort descending and carry the order through every per-exponent series.
+        let mut order: Vec<usize> = (0..k).collect();
+        order.sort_by(|&a, &b| raw[b].total_cmp(&raw[a]));
+        let exponents: Vec<f64> = order.iter().map(|&i| raw[i]).collect();
+        let mut running = self.running;
+        running.values = permute_rows(&running.values, &order);
+        let stderr: Vec<f64> = order
+            .iter()
+            .map(|&i| {
+                let column: Vec<f64> = batch_means.iter().skip(i).step_by(k).copied().collect();
+                stderr_of_batch_means(&column)
+            })
+            .collect();
+        let sum = exponents.iter().sum();
+        let at_equilibrium = self.max_speed * t_total <= 1e-9 * self.max_norm.max(1.0);
+        details.at_equilibrium = at_equilibrium;
+        let rule = SignRule::from_settings(settings, t_total, &exponents);
+        let (classification, signs) = classify(&exponents, &stderr, &rule, at_equilibrium);
+        LyapunovResult {
+            kaplan_yorke: kaplan_yorke(&exponents, full_spectrum),
+            exponents,
+            stderr,
+            significance: settings.significance,
+            zero_floor: rule.floor,
+            signs,
+            sum,
+            mean_trace: self.q0.map(|q0| (q - q0) / t_total),
+            classification,
+            t_total,
+            running,
+            details,
+        }
     }
 }
 

@@ -25,7 +25,7 @@ fn vehicle8() -> Vehicle8 {
 }
 
 fn plant8(model: &Vehicle8) -> Plant<2> {
-    Plant::from_info(&model.info(), |n| {
+    Plant::from_info(&model.info(), &|n| {
         param(&Vehicle8::PARAMS, &Vehicle8::DEFAULTS, n)
     })
     .unwrap()
@@ -185,7 +185,7 @@ fn closed_loop_tangent_is_exact_with_every_controller_part() {
     assert_tangent_exact(&field, 0.0, &x, "saturated");
     // The segway's wheel-torque map, with PID (NA = 8).
     let seg = Segway7::with_defaults();
-    let plant = Plant::<2>::from_info(&seg.info(), |n| {
+    let plant = Plant::<2>::from_info(&seg.info(), &|n| {
         param(&Segway7::PARAMS, &Segway7::DEFAULTS, n)
     })
     .unwrap();
@@ -413,7 +413,7 @@ fn unrecognised_inputs_are_a_clear_error() {
         inputs: &["push"],
         params: &[],
     };
-    let err = Plant::<1>::from_info(&info, |_| None).unwrap_err();
+    let err = Plant::<1>::from_info(&info, &|_| None).unwrap_err();
     assert!(matches!(err, ControlError::UnrecognisedInputs { .. }));
     assert!(err.to_string().contains("push"), "{err}");
 }
@@ -424,7 +424,7 @@ fn unrecognised_inputs_are_a_clear_error() {
 fn segway7_wheel_torques_realise_the_force() {
     let model = Segway7::with_defaults();
     let r = param(&Segway7::PARAMS, &Segway7::DEFAULTS, "R").unwrap();
-    let plant = Plant::<2>::from_info(&model.info(), |n| {
+    let plant = Plant::<2>::from_info(&model.info(), &|n| {
         param(&Segway7::PARAMS, &Segway7::DEFAULTS, n)
     })
     .unwrap();

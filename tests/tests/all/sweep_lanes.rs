@@ -14,7 +14,7 @@ use twv_kernels::lanes::LANES;
 use twv_model::Model;
 
 fn plant(model: &Vehicle8) -> Plant<2> {
-    Plant::from_info(&model.info(), |n| {
+    Plant::from_info(&model.info(), &|n| {
         let i = Vehicle8::PARAMS.iter().position(|p| p.name == n)?;
         Some(Vehicle8::DEFAULTS[i])
     })
