@@ -12,7 +12,7 @@ fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> common::Scratch {
     common::scratch("cli", name)
 }
 
@@ -218,7 +218,8 @@ fn unwritable_output_directory_is_an_error_without_output() {
 
 #[test]
 fn lyap_writes_json_csv_and_figure() {
-    let dir = scratch("lyap").join("out");
+    let base = scratch("lyap");
+    let dir = base.join("out");
     let out = twv(&[
         "lyap",
         "--model",

@@ -5,7 +5,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use common::{fails_with, negative_with, twv};
 
@@ -29,7 +29,7 @@ fn json(args: &[&str]) -> Value {
     serde_json::from_str(&ok(&all)).expect("stdout is JSON")
 }
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> common::Scratch {
     common::scratch("cli-control", name)
 }
 
@@ -203,7 +203,8 @@ fn disturb_magnitude_sets_the_initial_tilt() {
 
 #[test]
 fn maneuver_starts_cruises_and_stops() {
-    let dir = scratch("maneuver").join("out");
+    let base = scratch("maneuver");
+    let dir = base.join("out");
     let j = json(&[
         "sim",
         "--scenario",
@@ -270,7 +271,8 @@ fn sim_kp_threshold_is_mx_g() {
 
 #[test]
 fn phase_draws_four_portraits_and_names_the_stable_sets() {
-    let dir = scratch("phase").join("out");
+    let base = scratch("phase");
+    let dir = base.join("out");
     let j = json(&["phase", "--t-end", "3", "--out", dir.to_str().unwrap()]);
     for f in [
         "phase_1.svg",

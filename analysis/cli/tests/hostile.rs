@@ -35,7 +35,7 @@ fn bounded(args: &[&str], limit: Duration) -> Output {
     }
 }
 
-fn scratch(name: &str) -> PathBuf {
+fn scratch(name: &str) -> common::Scratch {
     common::scratch("hostile", name)
 }
 
@@ -60,7 +60,8 @@ fn absurd_steps_are_refused_up_front() {
     let out = bounded(&["lyap", "--x0", X8, "--iterations", "1000000000"], SECONDS);
     fails_with(&out, &["RK4 steps"]);
     // A sweep of 10¹² points (56 TB of results) is refused before anything is made.
-    let dir = scratch("huge").join("map");
+    let base = scratch("huge");
+    let dir = base.join("map");
     let out = bounded(
         &[
             "sweep",
@@ -178,7 +179,8 @@ fn negative_numbers_parse_and_out_of_range_ones_are_named() {
     );
     fails_with(&twv(&["sim", "--t-end", "-2"]), &["t_end", "-2"]);
     // A negative gain range is a valid map (every point unstable), not a parse error.
-    let dir = scratch("negative").join("map");
+    let base = scratch("negative");
+    let dir = base.join("map");
     let out = twv(&[
         "sweep",
         "--kp",
@@ -200,7 +202,8 @@ fn negative_numbers_parse_and_out_of_range_ones_are_named() {
 
 #[test]
 fn a_failed_run_leaves_no_folder() {
-    let dir = scratch("failed").join("sim");
+    let base = scratch("failed");
+    let dir = base.join("sim");
     fails_with(
         &twv(&["sim", "--h", "0.5", "--out", dir.to_str().unwrap()]),
         &["sample interval"],
@@ -210,7 +213,8 @@ fn a_failed_run_leaves_no_folder() {
 
 #[test]
 fn a_folder_holds_one_sweep() {
-    let dir = scratch("two-sweeps").join("map");
+    let base = scratch("two-sweeps");
+    let dir = base.join("map");
     let d = dir.to_str().unwrap();
     let first = twv(&[
         "sweep",
