@@ -7,7 +7,7 @@ use twv_model::Model;
 
 use super::error::ControlError;
 use super::plant::Plant;
-use super::settings::{AntiWindup, ControllerSettings, VelocityLoop};
+use super::settings::{AntiWindup, ControllerSettings, Setpoint, VelocityLoop};
 use crate::integrate::{VarState, VectorField};
 
 /// Where each controller state sits in the augmented state (absolute indices ≥ NX), in the
@@ -244,6 +244,23 @@ where
     /// skips them).
     #[inline(always)]
     fn law<const GRAD: bool>(&self, t: f64, xa: &[f64; NA]) -> Law<NA, NU> {
+        let setpoint = self
+            .settings
+            .pitch
+            .setpoint
+            .eval(xa[self.plant.measured.phi]);
+        self.law_at::<GRAD>(t, xa, setpoint)
+    }
+
+    /// [`law`](Self::law) with the setpoint (Φ_ref(Φ), dΦ_ref/dΦ) already evaluated (the maps
+    /// evaluate eight at once).
+    #[inline(always)]
+    fn law_at<const GRAD: bool>(
+        &self,
+        t: f64,
+        xa: &[f64; NA],
+        setpoint: (f64, f64),
+    ) -> Law<NA, NU> {
         let s = self.settings;
         let p = &s.pitch;
         let g = &p.gains;
@@ -253,7 +270,7 @@ where
 
         // Setpoint, with the velocity loop's lean.
         let phi = xa[m.phi];
-        let (mut phi_ref, dsp) = p.setpoint.eval(phi);
+        let (mut phi_ref, dsp) = setpoint;
         let mut d_ref = zero;
         if GRAD {
             d_ref = with_entry(d_ref, m.phi, dsp);
@@ -469,6 +486,30 @@ where
         }
     }
 
+    /// Each loop's setpoint at its Φ, as [`Setpoint::eval`] gives it: the study's sine for all
+    /// eight through one lane-wise sincos (the same bits), other setpoints one by one.
+    #[inline(always)]
+    fn setpoints(loops: &[Self; LANES], y: &[VarState<NA, 1>; LANES]) -> [(f64, f64); LANES] {
+        let phi = loops[0].plant.measured.phi;
+        let mut out = [(0.0, 0.0); LANES];
+        let amplitudes = loops.map(|l| match l.settings.pitch.setpoint {
+            Setpoint::Sine { amplitude } => Some(amplitude),
+            _ => None,
+        });
+        if amplitudes.iter().all(Option::is_some) {
+            let (s, c) = twv_kernels::lanes::sin_cos(y.map(|y| y.x[phi]));
+            for l in 0..LANES {
+                let a = amplitudes[l].unwrap_or_default();
+                out[l] = (a * s[l], a * c[l]);
+            }
+        } else {
+            for l in 0..LANES {
+                out[l] = loops[l].settings.pitch.setpoint.eval(y[l].x[phi]);
+            }
+        }
+        out
+    }
+
     /// [`VectorField::eval`] with one tangent vector for [`LANES`] loops of the same model at
     /// once (loop `l` at `y[l]` → `dy[l]`, no trace): the laws one by one, the model through its
     /// lanes kernel ([`Model::f_jw_jac_u_lanes`]). Every lane has the bits of `eval` alone.
@@ -488,10 +529,11 @@ where
             du: [0.0; NU],
             dz: [0.0; 3],
         }; LANES];
+        let setpoints = Self::setpoints(loops, y);
         for l in 0..LANES {
             // Reduced at once to what is needed later: copying eight whole laws (their
             // gradient rows) costs more than the model itself.
-            let law = loops[l].law::<true>(t, &y[l].x);
+            let law = loops[l].law_at::<true>(t, &y[l].x, setpoints[l]);
             x[l] = core::array::from_fn(|i| y[l].x[i]);
             w[l] = core::array::from_fn(|i| y[l].w[0][i]);
             u[l] = law.cmd.u;

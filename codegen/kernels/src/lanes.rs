@@ -52,6 +52,23 @@ pub fn sin_cos_each(x: Lanes) -> (Lanes, Lanes) {
     (s, c)
 }
 
+/// (sin, cos) of every lane with the best build this CPU runs ([`crate::isa::current`]):
+/// [`wide::sin_cos`], [`wide_avx2::sin_cos`], or one lane after the other. Every path has the
+/// bits of [`crate::trig::sin_cos`]; for callers outside a `target_feature` build (the closed
+/// loop's setpoint in the maps).
+#[inline]
+pub fn sin_cos(x: Lanes) -> (Lanes, Lanes) {
+    #[cfg(target_arch = "x86_64")]
+    match crate::isa::current() {
+        // SAFETY: `current` returns an ISA only when the CPU and the OS support it.
+        crate::isa::Isa::Avx512 => return unsafe { wide::sin_cos(x) },
+        // SAFETY: as above.
+        crate::isa::Isa::Avx2 => return unsafe { wide_avx2::sin_cos(x) },
+        crate::isa::Isa::Baseline => {}
+    }
+    sin_cos_each(x)
+}
+
 /// `v` at every lane.
 #[inline(always)]
 pub const fn splat(v: f64) -> Lanes {

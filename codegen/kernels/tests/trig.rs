@@ -187,4 +187,6 @@ fn eight_wide_sin_cos_has_the_bits_of_the_scalar_one_on_every_isa_here() {
             eprintln!("SKIPPED: the AVX2 sincos did not run: this CPU has no AVX2");
         }
     }
+    // The dispatched entry, whatever build it picks here.
+    lanes_have_the_scalar_bits(twv_kernels::lanes::sin_cos);
 }
