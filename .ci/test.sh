@@ -62,8 +62,15 @@ export RUSTC_WORKSPACE_WRAPPER="$PWD/.ci/clippy-rustc"
 cargo test --workspace --no-run --profile dev
 cargo build --workspace --benches --profile dev
 
-step "cargo nextest (every test binary, in parallel)"
-cargo nextest run --workspace --cargo-profile dev --no-fail-fast
+# trybuild's compile-fail case builds the proc-macro's dependencies in a target folder of its
+# own (~50 s of one core): it runs in the background beside the doc tests and the Python
+# package, where a core is idle, instead of inside nextest. Both runs name what they ran.
+step "cargo nextest (every test binary, in parallel; the compile-fail case in the background)"
+compile_fail='test(=macro_errors_are_compile_errors)'
+cargo nextest run --workspace --cargo-profile dev --no-fail-fast -E "not $compile_fail"
+( cargo nextest run -p twv-macros --cargo-profile dev -E "$compile_fail" \
+    >target/compile-fail-test.log 2>&1 ) &
+compile_fail_pid=$!
 
 # The cluster mostly waits on its daemons: it runs beside the doc tests and the Python package.
 step "a real single-node Slurm cluster: sbatch --array shards of a sweep (in the background)"
@@ -90,6 +97,9 @@ TWV_BIN="$PWD/target/debug/twv" "$py" -m pytest -q -p no:cacheprovider python/te
 
 step "the browser test: the page's plots and margins are the CLI's for the dragged gains (its log)"
 finish "the browser test" "$browser_pid" target/browser-test.log
+
+step "trybuild: every defect of an IR file is a compile error naming it (its log)"
+finish "the compile-fail test" "$compile_fail_pid" target/compile-fail-test.log
 
 step "the Slurm cluster test: merged shards = unsharded map (its log)"
 finish "the Slurm cluster test" "$slurm_pid" target/slurm-test.log
