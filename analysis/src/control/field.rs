@@ -486,26 +486,20 @@ where
         }
     }
 
-    /// Each loop's setpoint at its Φ, as [`Setpoint::eval`] gives it: the study's sine for all
-    /// eight through one lane-wise sincos (the same bits), other setpoints one by one.
+    /// Each loop's setpoint at its Φ, as [`Setpoint::eval`] gives it, with the sines of all
+    /// eight from one lane-wise sincos (the same bits) when any loop's setpoint needs one.
     #[inline(always)]
     fn setpoints(loops: &[Self; LANES], y: &[VarState<NA, 1>; LANES]) -> [(f64, f64); LANES] {
-        let phi = loops[0].plant.measured.phi;
-        let mut out = [(0.0, 0.0); LANES];
-        let amplitudes = loops.map(|l| match l.settings.pitch.setpoint {
-            Setpoint::Sine { amplitude } => Some(amplitude),
-            _ => None,
-        });
-        if amplitudes.iter().all(Option::is_some) {
-            let (s, c) = twv_kernels::lanes::sin_cos(y.map(|y| y.x[phi]));
-            for l in 0..LANES {
-                let a = amplitudes[l].unwrap_or_default();
-                out[l] = (a * s[l], a * c[l]);
-            }
+        let phi = y.map(|y| y.x[loops[0].plant.measured.phi]);
+        let sine = |l: &Self| matches!(l.settings.pitch.setpoint, Setpoint::Sine { .. });
+        let (s, c) = if loops.iter().any(sine) {
+            twv_kernels::lanes::sin_cos(phi)
         } else {
-            for l in 0..LANES {
-                out[l] = loops[l].settings.pitch.setpoint.eval(y[l].x[phi]);
-            }
+            ([0.0; LANES], [0.0; LANES])
+        };
+        let mut out = [(0.0, 0.0); LANES];
+        for l in 0..LANES {
+            out[l] = loops[l].settings.pitch.setpoint.eval_with(|| (s[l], c[l]));
         }
         out
     }

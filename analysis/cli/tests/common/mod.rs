@@ -17,9 +17,9 @@ pub fn twv(args: &[&str]) -> Output {
 /// A fresh scratch folder per test (`group` keeps test binaries apart), removed when the test
 /// passes and kept for a look when it fails (dropped while panicking).
 pub fn scratch(group: &str, name: &str) -> Scratch {
-    let dir = Scratch::path_for(group, name);
+    let dir = scratch_path(group, name);
     std::fs::create_dir_all(&dir).unwrap();
-    Scratch(dir)
+    dir
 }
 
 /// A scratch folder's path that may not exist yet (for commands that must create it
