@@ -6,8 +6,9 @@ m2 (b² cos²φ + b² sin²φ) + I2_yy, and C p carries products that cancel in 
 rewritten here as a polynomial in the state, the inputs and the sine and cosine of each angle,
 reduced by sin² + cos² = 1, its terms grouped by their state monomial with the parameter
 coefficients factored — m2 b² + I2_yy, (I2_xx − I2_zz + m2 b²) w_z² sin φ cos φ — using sympy
-for the algebra. An entry is only replaced when the rewrite has fewer operations; entries too
-large to expand cheaply (the bicycle's) are kept as derived. The rewrite is exact algebra, so
+for the algebra. An entry is replaced when the rewrite has no more operations (at equal size
+the rewrite wins: its products share their parameter factors with the other entries); entries
+too large to expand cheaply (the bicycle's) are kept as derived. The rewrite is exact algebra, so
 the values agree to rounding (the modeling tests compare every model with its other routes).
 """
 
@@ -180,7 +181,7 @@ def _rewrite(x: sp.Expr, params: set[str]) -> sp.Expr | None:
 
 
 def canonical_entry(e: ca.SX, params: set[str], env: dict[str, ca.SX]) -> ca.SX:
-    """`e` rewritten (see the module doc) when that has fewer operations, else `e`."""
+    """`e` rewritten (see the module doc) when that has no more operations, else `e`."""
     if e.nnz() == 0 or e.is_zero() or e.is_constant() or e.is_symbolic():
         return e
     if ca.n_nodes(e) > MAX_NODES:

@@ -399,7 +399,7 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
     # Merging common subexpressions also cancels exact repeats (a - a = 0), so entries that
     # vanish identically, such as the left/right wheel cross terms, become structural zeros.
     # Then each entry in the form a careful person writes (canonical.py: sin² + cos² = 1,
-    # cancelling pairs gone, parameter coefficients factored), where that has fewer operations.
+    # cancelling pairs gone, parameter coefficients factored), where that has no more operations.
     names = [p_vec[i].name() for i in range(p_vec.numel())]
     params = set(names)
     env = {e.name(): e for e in [*q.values(), *pf.values(), *u.values(), *cspeed.values()]}
