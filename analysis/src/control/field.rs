@@ -2,13 +2,15 @@
 //! controller's), with its exact Jacobian, so the same value runs in the integrators, the
 //! simulations and `lyapunov_spectrum` (see [`crate::integrate::field`] for the recipe).
 
-use twv_kernels::lanes::LANES;
 use twv_model::Model;
 
 use super::error::ControlError;
 use super::plant::Plant;
-use super::settings::{AntiWindup, ControllerSettings, Setpoint, VelocityLoop};
-use crate::integrate::{VarState, VectorField};
+use super::settings::{AntiWindup, ControllerSettings, VelocityLoop};
+use crate::integrate::VectorField;
+
+mod lanes;
+pub use lanes::LoopLanes;
 
 /// Where each controller state sits in the augmented state (absolute indices ≥ NX), in the
 /// order ∫e, rate filter, ∫(v_ref − v_x); absent states take no slot, so a PD law has NZ = 0
@@ -483,67 +485,6 @@ where
             if let Some(iz) = iz {
                 f[iz] = zdot[slot];
             }
-        }
-    }
-
-    /// Each loop's setpoint at its Φ, as [`Setpoint::eval`] gives it, with the sines of all
-    /// eight from one lane-wise sincos (the same bits) when any loop's setpoint needs one.
-    #[inline(always)]
-    fn setpoints(loops: &[Self; LANES], y: &[VarState<NA, 1>; LANES]) -> [(f64, f64); LANES] {
-        let phi = y.map(|y| y.x[loops[0].plant.measured.phi]);
-        let sine = |l: &Self| matches!(l.settings.pitch.setpoint, Setpoint::Sine { .. });
-        let (s, c) = if loops.iter().any(sine) {
-            twv_kernels::lanes::sin_cos(phi)
-        } else {
-            ([0.0; LANES], [0.0; LANES])
-        };
-        let mut out = [(0.0, 0.0); LANES];
-        for l in 0..LANES {
-            out[l] = loops[l].settings.pitch.setpoint.eval_with(|| (s[l], c[l]));
-        }
-        out
-    }
-
-    /// [`VectorField::eval`] with one tangent vector for [`LANES`] loops of the same model at
-    /// once (loop `l` at `y[l]` → `dy[l]`, no trace): the laws one by one, the model through its
-    /// lanes kernel ([`Model::f_jw_jac_u_lanes`]). Every lane has the bits of `eval` alone.
-    pub fn eval_lanes(
-        loops: &[Self; LANES],
-        t: f64,
-        y: &[VarState<NA, 1>; LANES],
-        dy: &mut [VarState<NA, 1>; LANES],
-    ) {
-        let model = loops[0].model;
-        debug_assert!(loops.iter().all(|l| core::ptr::eq(l.model, model)));
-        let mut x = [[0.0; NX]; LANES];
-        let mut u = [[0.0; NU]; LANES];
-        let mut w = [[0.0; NX]; LANES];
-        let mut zdot = [[0.0; 3]; LANES];
-        let mut tangent = [Tangent {
-            du: [0.0; NU],
-            dz: [0.0; 3],
-        }; LANES];
-        let setpoints = Self::setpoints(loops, y);
-        for l in 0..LANES {
-            // Reduced at once to what is needed later: copying eight whole laws (their
-            // gradient rows) costs more than the model itself.
-            let law = loops[l].law_at::<true>(t, &y[l].x, setpoints[l]);
-            x[l] = core::array::from_fn(|i| y[l].x[i]);
-            w[l] = core::array::from_fn(|i| y[l].w[0][i]);
-            u[l] = law.cmd.u;
-            zdot[l] = law.zdot;
-            tangent[l] = loops[l].tangent(&law, &y[l].w[0]);
-        }
-        let (mut fx, mut jwx) = ([[0.0; NX]; LANES], [[0.0; NX]; LANES]);
-        let mut b = [[[0.0; NU]; NX]; LANES];
-        model.f_jw_jac_u_lanes(&x, &u, &w, &mut fx, &mut jwx, &mut b);
-        for (l, d) in dy.iter_mut().enumerate() {
-            let (tan, jwl) = (
-                core::slice::from_ref(&tangent[l]),
-                core::slice::from_ref(&jwx[l]),
-            );
-            loops[l].assemble::<1>(&zdot[l], tan, &fx[l], jwl, &b[l], &mut d.x, &mut d.w);
-            d.trace_integral = 0.0;
         }
     }
 }

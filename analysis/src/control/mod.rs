@@ -37,7 +37,7 @@ mod settings;
 mod simulate;
 
 pub use error::ControlError;
-pub use field::{Command, Layout, PidLoop};
+pub use field::{Command, Layout, LoopLanes, PidLoop};
 pub use loop_states::loop_states;
 pub use metrics::{response_metrics, LoopMetrics, ResponseMetrics};
 pub use plant::{InputMap, Measured, Plant};

@@ -1,9 +1,10 @@
 //! The max-Lyapunov metric at [`LANES`] grid points at once: the points' closed loops are
 //! stepped together so the model runs through its lanes kernel (one AVX-512 instruction stream
-//! for eight points, see `twv_kernels::lanes`), while everything else is done point by point with
-//! the very code of the one-point path ([`rk4_step_each`], the PID law, [`orthonormalize`]).
-//! Every point therefore gets the bits of [`metric::max_lyapunov`](super::metric::max_lyapunov)
-//! (`tests/tests/all/sweep_lanes.rs` checks it) and still depends only on its index.
+//! for eight points, see `twv_kernels::lanes`) and a plain PD law as lane arrays
+//! ([`LoopLanes`]), while everything else is done point by point with the very code of the
+//! one-point path ([`rk4_step_each`], [`orthonormalize`]). Every point therefore gets the bits
+//! of [`metric::max_lyapunov`](super::metric::max_lyapunov) (`tests/tests/all/sweep_lanes.rs`
+//! checks it) and still depends only on its index.
 //!
 //! The points share the time grid (same h, T and horizon), so one clock drives them all. A
 //! point that falls, blows up or degenerates is finished with that status and from then on put
@@ -16,7 +17,7 @@ use twv_model::Model;
 use super::config::MetricSettings;
 use super::metric::{lyapunov_settings, max_lyapunov, result};
 use super::point::{PointResult, Status};
-use crate::control::{loop_states, PidLoop};
+use crate::control::{loop_states, LoopLanes, PidLoop};
 use crate::integrate::{equal_steps, project, rk4_step_each, Rk4Scratch, VarState};
 use crate::lyapunov::{initial_basis, orthonormalize};
 
@@ -46,6 +47,7 @@ where
     let keep: [[bool; NA]; LANES] = core::array::from_fn(|l| loop_states(&loops[l], &[start[l].x]));
 
     let phi = loops[0].plant().measured.phi;
+    let field = LoopLanes::new(loops);
     let mut y = start;
     let mut scratch = Rk4Scratch::<NA, 1, LANES>::ZERO;
     let mut finished: [Option<Status>; LANES] = [None; LANES];
@@ -69,7 +71,7 @@ where
         let (steps, h) = equal_steps(t_stop - t, s.h);
         for step in 1..=steps {
             let finite = rk4_step_each(t, h, &mut y, &mut scratch, |t, y, dy| {
-                PidLoop::eval_lanes(loops, t, y, dy);
+                field.eval(t, y, dy);
                 for (d, k) in dy.iter_mut().zip(&keep) {
                     project(k, &mut d.w[0]);
                 }

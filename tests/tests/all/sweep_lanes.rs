@@ -1,7 +1,8 @@
 //! The sweep's eight-at-a-time max-Lyapunov metric (`max_lyapunov_lanes`, lanes kernel) gives
 //! every point exactly the bits and status of the one-point metric (`metric::max_lyapunov`),
-//! whatever mix of outcomes shares a group, for PD, PID with saturation and every controller
-//! part, with the AVX-512 and AVX2 lanes kernels and with the one-lane-at-a-time fallback.
+//! whatever mix of outcomes shares a group, for PD (the lane-wise law: plain, saturated, about
+//! a constant lean), PID with saturation and every controller part, with the AVX-512 and AVX2
+//! lanes kernels and with the one-lane-at-a-time fallback.
 
 use twv_analysis::control::{
     AntiWindup, ControllerSettings, PidLoop, PitchPid, Plant, Profile, Setpoint, VelocityLoop,
@@ -98,6 +99,25 @@ fn lanes_metric_has_the_bits_of_the_one_point_metric() {
             "the PD group should contain a {wanted:?} point: {statuses:?}"
         );
     }
+
+    // PD with a force limit some gains reach (the lane-wise law's saturated branch), and PD
+    // about a constant lean (its setpoint without a Φ-derivative).
+    let saturated = ControllerSettings {
+        pitch: PitchPid {
+            saturation: Some(3000.0),
+            ..pd.pitch
+        },
+        ..ControllerSettings::default()
+    };
+    compare::<8>(&saturated, 0.0, "PD saturated");
+    let lean = ControllerSettings {
+        pitch: PitchPid {
+            setpoint: Setpoint::Constant { value: 0.02 },
+            ..pd.pitch
+        },
+        ..ControllerSettings::default()
+    };
+    compare::<8>(&lean, 0.0, "PD about a constant lean");
 
     // PID with saturation and back-calculation (NA = 9).
     let pid = ControllerSettings {

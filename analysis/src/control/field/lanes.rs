@@ -1,0 +1,190 @@
+//! The closed loops of [`LANES`] grid points evaluated together, for the maps: the model runs
+//! through its lanes kernel ([`Model::f_jw_jac_u_lanes`]) and the laws either one loop after
+//! the other (any controller) or, for the maps' common case of a plain PD law, as lane arrays.
+//! Every lane has the bits of [`VectorField::eval`](crate::integrate::VectorField::eval) of its
+//! loop alone (`tests/tests/all/sweep_lanes.rs` checks each case).
+
+use twv_kernels::lanes::{Lanes, LANES};
+use twv_model::Model;
+
+use super::{PidLoop, Tangent};
+use crate::control::settings::Setpoint;
+use crate::integrate::VarState;
+
+/// Eight closed loops of one model, evaluated together with one tangent vector each.
+pub struct LoopLanes<'l, 'a, M, const NX: usize, const NU: usize, const NA: usize> {
+    loops: &'l [PidLoop<'a, M, NX, NU, NA>; LANES],
+    /// The laws as lane arrays, when every loop is a plain PD law of the same plant.
+    pd: Option<PdLanes<NU>>,
+}
+
+/// A plain PD law (no controller state, no outer loop) at eight loops of one plant:
+/// F = sat(Kp (Φ − Φ_ref(Φ)) + Kd Φ̇), u = F·force_dir, lane `l` with loop `l`'s gains.
+struct PdLanes<const NU: usize> {
+    phi: usize,
+    rate: usize,
+    kp: Lanes,
+    kd: Lanes,
+    /// F_max, +∞ without saturation (no command exceeds it: the same branch as `None`).
+    force_max: Lanes,
+    force_dir: [f64; NU],
+    yaw_dir: [f64; NU],
+}
+
+impl<'l, 'a, M, const NX: usize, const NU: usize, const NA: usize> LoopLanes<'l, 'a, M, NX, NU, NA>
+where
+    M: Model<NX, NU>,
+{
+    /// The loops `loops`, all of the same model.
+    pub fn new(loops: &'l [PidLoop<'a, M, NX, NU, NA>; LANES]) -> Self {
+        debug_assert!(loops.iter().all(|l| core::ptr::eq(l.model, loops[0].model)));
+        let plain = |l: &PidLoop<'a, M, NX, NU, NA>| {
+            let s = l.settings;
+            l.layout.states().is_empty()
+                && s.velocity.is_none()
+                && s.yaw.is_none()
+                && l.plant == loops[0].plant
+        };
+        let pd = loops.iter().all(plain).then(|| {
+            let plant = &loops[0].plant;
+            let gains = loops.map(|l| l.settings.pitch.gains);
+            PdLanes {
+                phi: plant.measured.phi,
+                rate: plant.measured.w_y,
+                kp: gains.map(|g| g.kp),
+                kd: gains.map(|g| g.kd),
+                force_max: loops.map(|l| l.settings.pitch.saturation.unwrap_or(f64::INFINITY)),
+                force_dir: plant.inputs.force,
+                yaw_dir: plant.inputs.yaw.unwrap_or([0.0; NU]),
+            }
+        });
+        Self { loops, pd }
+    }
+
+    /// [`VectorField::eval`](crate::integrate::VectorField::eval) with one tangent vector for
+    /// every loop at once (loop `l` at `y[l]` → `dy[l]`, no trace).
+    #[inline(always)]
+    pub fn eval(&self, t: f64, y: &[VarState<NA, 1>; LANES], dy: &mut [VarState<NA, 1>; LANES]) {
+        let setpoints = self.setpoints(y);
+        let mut u = [[0.0; NU]; LANES];
+        let mut zdot = [[0.0; 3]; LANES];
+        let mut tangent = [Tangent {
+            du: [0.0; NU],
+            dz: [0.0; 3],
+        }; LANES];
+        match &self.pd {
+            Some(pd) => (u, tangent) = pd.eval(y, &setpoints),
+            None => {
+                for (l, (lp, y)) in self.loops.iter().zip(y).enumerate() {
+                    // Reduced at once to what is needed later: copying eight whole laws (their
+                    // gradient rows) costs more than the model itself.
+                    let law = lp.law_at::<true>(t, &y.x, setpoints[l]);
+                    u[l] = law.cmd.u;
+                    zdot[l] = law.zdot;
+                    tangent[l] = lp.tangent(&law, &y.w[0]);
+                }
+            }
+        }
+        let x: [[f64; NX]; LANES] = core::array::from_fn(|l| core::array::from_fn(|i| y[l].x[i]));
+        let w: [[f64; NX]; LANES] =
+            core::array::from_fn(|l| core::array::from_fn(|i| y[l].w[0][i]));
+        let (mut fx, mut jwx) = ([[0.0; NX]; LANES], [[0.0; NX]; LANES]);
+        let mut b = [[[0.0; NU]; NX]; LANES];
+        self.loops[0]
+            .model
+            .f_jw_jac_u_lanes(&x, &u, &w, &mut fx, &mut jwx, &mut b);
+        for (l, d) in dy.iter_mut().enumerate() {
+            let (tan, jwl) = (
+                core::slice::from_ref(&tangent[l]),
+                core::slice::from_ref(&jwx[l]),
+            );
+            self.loops[l].assemble::<1>(&zdot[l], tan, &fx[l], jwl, &b[l], &mut d.x, &mut d.w);
+            d.trace_integral = 0.0;
+        }
+    }
+
+    /// Each loop's setpoint at its Φ, as [`Setpoint::eval`] gives it, with the sines of all
+    /// eight from one lane-wise sincos (the same bits) when any loop's setpoint needs one.
+    #[inline(always)]
+    fn setpoints(&self, y: &[VarState<NA, 1>; LANES]) -> [(f64, f64); LANES] {
+        let phi = y.map(|y| y.x[self.loops[0].plant.measured.phi]);
+        let sine = |l: &PidLoop<'a, M, NX, NU, NA>| {
+            matches!(l.settings.pitch.setpoint, Setpoint::Sine { .. })
+        };
+        let (s, c) = if self.loops.iter().any(sine) {
+            twv_kernels::lanes::sin_cos(phi)
+        } else {
+            ([0.0; LANES], [0.0; LANES])
+        };
+        let mut out = [(0.0, 0.0); LANES];
+        for l in 0..LANES {
+            out[l] = self.loops[l]
+                .settings
+                .pitch
+                .setpoint
+                .eval_with(|| (s[l], c[l]));
+        }
+        out
+    }
+}
+
+impl<const NU: usize> PdLanes<NU> {
+    /// u and ∂u/∂x·w of every lane. The operations of [`PidLoop::law_at`] and
+    /// [`PidLoop::tangent`] for this law, entry by entry in the same order, with the gradient
+    /// rows never stored: row entries that are zero there are the same `+0` here, and the dot
+    /// products still add every term from `-0.0` (the start of `f64`'s `Sum`), so even the signs
+    /// of zeros and NaNs come out as in the one-loop path.
+    #[inline(always)]
+    fn eval<const NA: usize>(
+        &self,
+        y: &[VarState<NA, 1>; LANES],
+        setpoints: &[(f64, f64); LANES],
+    ) -> ([[f64; NU]; LANES], [Tangent<NU>; LANES]) {
+        let phi: Lanes = core::array::from_fn(|l| y[l].x[self.phi]);
+        let rate: Lanes = core::array::from_fn(|l| y[l].x[self.rate]);
+        let mut force = [0.0; LANES];
+        let mut saturated = [false; LANES];
+        let mut de_phi = [0.0; LANES];
+        for l in 0..LANES {
+            let (phi_ref, dsp) = setpoints[l];
+            let e = phi[l] - phi_ref;
+            // unit(Φ) − ∂Φ_ref/∂x at Φ's entry, as the one-loop path forms it (elsewhere
+            // 0 + (−1)·0 = +0). `-dsp` would differ from `-1.0 * dsp` in the sign of a NaN.
+            #[allow(clippy::neg_multiply)]
+            let d = 1.0 + -1.0 * dsp;
+            de_phi[l] = d;
+            let cmd = self.kp[l] * e + self.kd[l] * rate[l];
+            let fm = self.force_max[l];
+            (force[l], saturated[l]) = if cmd > fm {
+                (fm, true)
+            } else if cmd < -fm {
+                (-fm, true)
+            } else {
+                (cmd, false)
+            };
+        }
+        let (mut d_force_w, mut d_yaw_w) = ([-0.0; LANES], [-0.0; LANES]);
+        for j in 0..NA {
+            for l in 0..LANES {
+                let de = if j == self.phi { de_phi[l] } else { 0.0 };
+                let mut d_cmd = 0.0 + self.kp[l] * de;
+                if j == self.rate {
+                    d_cmd += self.kd[l];
+                }
+                // The gradient of F: the command's, zero while saturated.
+                let d_force = if saturated[l] { 0.0 } else { d_cmd };
+                let w = y[l].w[0][j];
+                d_force_w[l] += d_force * w;
+                d_yaw_w[l] += 0.0 * w;
+            }
+        }
+        let (fdir, ydir) = (&self.force_dir, &self.yaw_dir);
+        let u =
+            core::array::from_fn(|l| core::array::from_fn(|k| fdir[k] * force[l] + ydir[k] * 0.0));
+        let tangent = core::array::from_fn(|l| Tangent {
+            du: core::array::from_fn(|k| fdir[k] * d_force_w[l] + ydir[k] * d_yaw_w[l]),
+            dz: [0.0; 3],
+        });
+        (u, tangent)
+    }
+}
