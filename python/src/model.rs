@@ -6,7 +6,10 @@ use std::path::PathBuf;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use twv_analysis::api::{evaluate_batch, Batch, Quantity};
-use twv_analysis::model::{vehicle_defaults, ModelSource, ModelSpec, ParamSource, ResolvedModel};
+use twv_analysis::model::{
+    vehicle_defaults, Compiler, Engine, IrRuntime, ModelSource, ModelSpec, ParamSource,
+    ResolvedModel,
+};
 
 use crate::errors::{to_py, InputError};
 use crate::{PAPER_TOML, SEGWAY_TOML};
@@ -104,12 +107,13 @@ impl Model {
 #[pymethods]
 impl Model {
     /// A shipped model by `name` (default vehicle8), or a model IR from `ir_file` or the text
-    /// `ir_json` (interpreted, bit-identical to generated code); parameters from `params_file`
-    /// or the TOML text `params_toml` (default: the vehicle file a shipped vehicle comes with,
-    /// else the IR's defaults), then `overrides` (TOML key → its values).
+    /// `ir_json` (bit-identical to generated code); parameters from `params_file` or the TOML
+    /// text `params_toml` (default: the vehicle file a shipped vehicle comes with, else the
+    /// IR's defaults), then `overrides` (TOML key → its values). A model without generated code
+    /// runs as `runtime`: "jit" (compiled to native code when loaded) or "interpreter".
     #[new]
     #[pyo3(signature = (name = None, *, ir_file = None, ir_json = None, params_file = None,
-                        params_toml = None, overrides = None))]
+                        params_toml = None, overrides = None, runtime = "jit"))]
     fn new(
         name: Option<String>,
         ir_file: Option<PathBuf>,
@@ -117,7 +121,20 @@ impl Model {
         params_file: Option<PathBuf>,
         params_toml: Option<String>,
         overrides: Option<Vec<(String, Vec<f64>)>>,
+        runtime: &str,
     ) -> PyResult<Self> {
+        let runtime = match runtime {
+            "jit" => IrRuntime::Compiled(Compiler {
+                name: "cranelift",
+                compile: |ir| twv_jit::compile(ir).map_err(|e| e.to_string()),
+            }),
+            "interpreter" => IrRuntime::Interpreter,
+            other => {
+                return Err(InputError::new_err(format!(
+                    "runtime: {other:?} is not one of \"jit\", \"interpreter\""
+                )))
+            }
+        };
         let given = [name.is_some(), ir_file.is_some(), ir_json.is_some()];
         if given.iter().filter(|g| **g).count() > 1 {
             return Err(InputError::new_err(
@@ -152,7 +169,12 @@ impl Model {
             }
             (None, None, None) => ParamSource::Defaults,
         };
-        let mut resolved = ModelSpec { model, params }.resolve().map_err(to_py)?;
+        let spec = ModelSpec {
+            model,
+            params,
+            runtime,
+        };
+        let mut resolved = spec.resolve().map_err(to_py)?;
         if let Some(o) = overrides.filter(|o| !o.is_empty()) {
             resolved = resolved.with_overrides(&o, "overrides").map_err(to_py)?;
         }
@@ -188,10 +210,10 @@ impl Model {
     /// `generated` (a shipped model's compiled kernels) or `interpreted` (an IR).
     #[getter]
     fn engine(&self) -> &'static str {
-        if self.resolved.is_shipped() {
-            "generated"
-        } else {
-            "interpreted"
+        match self.resolved.engine {
+            Engine::Generated(_) => "generated",
+            Engine::Jit => "jit",
+            Engine::Interpreted => "interpreted",
         }
     }
 

@@ -31,7 +31,7 @@ def test_spectrum_shipped(vehicle8, tmp_path):
 
 def test_spectrum_interpreted_ir_closed_loop_dopri():
     model = twv.Model(ir=IR7)
-    assert model.engine == "interpreted"
+    assert model.engine == "jit"
     cli = cli_json(
         "lyap",
         "--ir",

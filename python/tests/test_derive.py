@@ -1,5 +1,5 @@
-"""From a description to an analysed model in one session: derived (CasADi) models run on the
-interpreter with exactly the bits of the shipped, compiled ones."""
+"""From a description to an analysed model in one session: derived (CasADi) models, compiled at
+run time (the JIT), run with exactly the bits of the shipped, compiled ones."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from twv import modeling
 def test_derived_vehicle7_has_the_bits_of_the_shipped_one():
     derived = twv.derive("vehicle7")
     shipped = twv.Model("vehicle7")
-    assert derived.engine == "interpreted" and shipped.engine == "generated"
+    assert derived.engine == "jit" and shipped.engine == "generated"
     x = np.random.default_rng(4).uniform(-1, 1, (2000, 7))
     u = np.random.default_rng(5).uniform(-100, 100, (2000, 2))
     assert np.array_equal(derived.f(x, u), shipped.f(x, u))

@@ -55,11 +55,18 @@ def test_f_equals_cli_eval_for_shipped_and_ir(vehicle8):
     cli = cli_json("eval", "--x", ",".join(map(str, x)), "--u", "10,-3", "--jac", flag=False)
     assert vehicle8.f(x, [10, -3]).tolist() == cli["f"]
     assert vehicle8.jac_x(x, [10, -3]).tolist() == cli["jac_x"]
-    interpreted = twv.Model(
-        ir=REPO / "generated" / "ir" / "vehicle8.json", params=REPO / "vehicles" / "paper.toml"
-    )
-    assert interpreted.engine == "interpreted"
-    assert np.array_equal(interpreted.f(states(1000, 8)), vehicle8.f(states(1000, 8)))
+    ir, paper = REPO / "generated" / "ir" / "vehicle8.json", REPO / "vehicles" / "paper.toml"
+    interpreted = twv.Model(ir=ir, params=paper, runtime="interpreter")
+    jitted = twv.Model(ir=ir, params=paper)
+    assert (interpreted.engine, jitted.engine) == ("interpreted", "jit")
+    x, u, v = states(1000, 8), np.tile([10.0, -3.0], (1000, 1)), states(1000, 8)[::-1].copy()
+    # Generated code, the interpreter and the JIT: the same bits.
+    for model in (interpreted, jitted):
+        assert np.array_equal(model.f(x, u), vehicle8.f(x, u))
+        assert np.array_equal(model.jac_x(x, u), vehicle8.jac_x(x, u))
+        assert np.array_equal(model.jw(x, v, u), vehicle8.jw(x, v, u))
+    with pytest.raises(twv.InputError, match="runtime"):
+        twv.Model(ir=ir, runtime="llvm")
 
 
 def test_parameters_from_a_dict_a_file_or_toml(vehicle8, tmp_path):

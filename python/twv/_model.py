@@ -19,16 +19,18 @@ class Model:
     """A model and its parameter values, resolved and checked as `twv --model/--ir/--params`.
 
     Model("vehicle8")                       shipped model; a vehicle gets its vehicle file
-    Model(ir="my_model.json")               a model IR file (interpreted, same bits as compiled)
+    Model(ir="my_model.json")               a model IR file (same bits as compiled code)
     Model(ir=ir_text_or_dict)               an IR in memory (what `derive` makes)
     params="file.toml" | {"m2": 10.0, "I2": [0.8, 0.8, 0.03]}   a file, or values over the defaults
+    runtime="jit" | "interpreter"           how a model without generated code runs: compiled
+                                            to native code when loaded (default), or interpreted
 
     Units are SI (kg, m, s, N, rad) throughout.
     """
 
-    def __init__(self, name: str | None = None, *, ir=None, params=None):
-        self._recipe = (name, ir, params)
-        kwargs: dict[str, Any] = {}
+    def __init__(self, name: str | None = None, *, ir=None, params=None, runtime: str = "jit"):
+        self._recipe = (name, ir, params, runtime)
+        kwargs: dict[str, Any] = {"runtime": runtime}
         if ir is not None:
             if isinstance(ir, Mapping):
                 kwargs["ir_json"] = json.dumps(ir)
@@ -52,8 +54,7 @@ class Model:
 
     def __reduce__(self):
         # Rebuilt from its recipe in another process (a process pool, a Dask worker).
-        name, ir, params = self._recipe
-        return (_rebuild, (name, ir, params))
+        return (_rebuild, self._recipe)
 
     def __repr__(self) -> str:
         return f"Model({self.name!r}, {self.engine}, params from {self.params_origin})"
@@ -130,8 +131,8 @@ class Model:
         return out[0] if single else out
 
 
-def _rebuild(name, ir, params) -> Model:
-    return Model(name, ir=ir, params=params)
+def _rebuild(name, ir, params, runtime) -> Model:
+    return Model(name, ir=ir, params=params, runtime=runtime)
 
 
 def derive(system, symbols=None, *, params=None) -> Model:

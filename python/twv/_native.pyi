@@ -20,6 +20,7 @@ class Model:
         params_file: str | PathLike[str] | None = None,
         params_toml: str | None = None,
         overrides: list[tuple[str, list[float]]] | None = None,
+        runtime: str = "jit",
     ) -> None: ...
     @property
     def name(self) -> str: ...

@@ -1,5 +1,6 @@
 //! Zero heap allocations in the hot methods (f, jac_x, jac_x_sparse, f_jw, f_jw_jac_u and its
-//! eight-lane form) of generated and interpreted models, after construction. Its own test
+//! eight-lane form) of generated, interpreted and JIT-compiled models, after construction (and,
+//! for the JIT, after the first call that compiles each routine). Its own test
 //! binary because it installs a counting global allocator; the counter is per thread so the test
 //! harness's threads do not interfere.
 
@@ -90,6 +91,28 @@ fn interpreted_models_do_not_allocate_after_construction() {
     let ir = twv_ir::parse_ir(twv_generated::ir_json("lorenz").unwrap(), "lorenz.json").unwrap();
     let model = Interpreted::<3, 0>::with_defaults(&ir).unwrap();
     assert_eq!(hot_path_allocations(&model), 0);
+}
+
+#[test]
+fn jit_compiled_models_do_not_allocate_once_their_routines_exist() {
+    for name in ["vehicle8", "lorenz"] {
+        let ir = twv_ir::parse_ir(twv_generated::ir_json(name).unwrap(), name).unwrap();
+        let native = twv_jit::compile(&ir).unwrap();
+        let check = |model: &dyn Fn() -> usize| {
+            // The first calls compile the routines they use (and allocate); later ones do not.
+            assert!(model() > 0, "{name}: the first calls compile");
+            assert_eq!(model(), 0, "{name}: calls after the first");
+        };
+        if name == "vehicle8" {
+            let model =
+                Interpreted::<8, 2>::with_native(&ir, &ir.defaults(), Some(native)).unwrap();
+            check(&|| hot_path_allocations(&model));
+        } else {
+            let model =
+                Interpreted::<3, 0>::with_native(&ir, &ir.defaults(), Some(native)).unwrap();
+            check(&|| hot_path_allocations(&model));
+        }
+    }
 }
 
 /// The counter works: the zeros above are not vacuous.

@@ -14,7 +14,9 @@ use twv_analysis::control::{
 use twv_analysis::integrate::DopriOptions;
 use twv_analysis::linear::PidGains;
 use twv_analysis::lyapunov::IntegratorChoice;
-use twv_analysis::model::{ModelSource, ModelSpec, ParamSource, ResolvedModel};
+use twv_analysis::model::{
+    Compiler, IrRuntime, ModelSource, ModelSpec, ParamSource, ResolvedModel,
+};
 use twv_analysis::output::Files;
 
 use crate::progress::Bar;
@@ -99,13 +101,46 @@ pub struct ModelArgs {
     /// Shipped model: vehicle8, vehicle7, segway7, lorenz or henon_heiles [default: vehicle8]
     #[arg(long, value_name = "NAME", conflicts_with = "ir")]
     pub model: Option<String>,
-    /// A model IR file (twv-ir/1) to evaluate with the interpreter, without recompiling
+    /// A model IR file (twv-ir/1) to run without recompiling twv (see --runtime)
     #[arg(long, value_name = "FILE")]
     pub ir: Option<PathBuf>,
     /// Parameter file (TOML, SI units) [default: for the vehicles vehicles/paper.toml
     /// (segway7: vehicles/segway.toml), embedded in the binary; otherwise the IR's defaults]
     #[arg(long, value_name = "FILE")]
     pub params: Option<PathBuf>,
+    /// How a model without generated code (--ir, whipple) runs: `jit` compiles it to native
+    /// code when it is loaded (Cranelift; the interpreter's bits), `interpreter` interprets it
+    /// (the reference) [default: jit in a build with the `jit` feature, else interpreter]
+    #[arg(long, value_name = "RUNTIME", value_parser = ["jit", "interpreter"])]
+    pub runtime: Option<String>,
+}
+
+/// The JIT of a build with the `jit` feature.
+#[cfg(feature = "jit")]
+const JIT: Option<IrRuntime> = Some(IrRuntime::Compiled(Compiler {
+    name: "cranelift",
+    compile: |ir| twv_jit::compile(ir).map_err(|e| e.to_string()),
+}));
+
+#[cfg(not(feature = "jit"))]
+const JIT: Option<IrRuntime> = None;
+
+/// `--runtime`'s value (see [`ModelArgs::runtime`]).
+fn runtime(given: Option<&str>) -> IrRuntime {
+    match (given, JIT) {
+        (Some("interpreter"), _) | (None, None) => IrRuntime::Interpreter,
+        (_, Some(jit)) => jit,
+        (Some(_), None) => IrRuntime::Compiled(Compiler {
+            name: "none",
+            compile: |_| {
+                Err(
+                    "this twv was built without the JIT: rebuild it with `--features jit` or \
+                     run `--runtime interpreter`"
+                        .to_string(),
+                )
+            },
+        }),
+    }
 }
 
 impl ModelArgs {
@@ -123,7 +158,11 @@ impl ModelArgs {
             (None, Some(name)) => ctx.vehicle_defaults(&name).unwrap_or_default(),
             (None, None) => ParamSource::Defaults,
         };
-        ModelSpec { model, params }
+        ModelSpec {
+            model,
+            params,
+            runtime: runtime(self.runtime.as_deref()),
+        }
     }
 
     /// The resolved model.

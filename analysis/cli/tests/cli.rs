@@ -72,6 +72,76 @@ fn interpreter_and_generated_code_agree_through_the_cli() {
     assert_eq!(a.stdout, b.stdout, "bit-identical JSON");
 }
 
+/// `--runtime`: an IR file's closed-loop spectrum (Dopri5, a saturated PID) compiled by the
+/// JIT writes the same bytes as the interpreter's, and the spectrum of the shipped model.
+#[test]
+fn the_jit_and_the_interpreter_write_the_same_files() {
+    let dir = scratch("runtime");
+    let ir = repo().join("generated/ir/vehicle7.json");
+    let paper = repo().join("vehicles/paper.toml");
+    let spectrum = |model: &[&str], out: &str| {
+        let out_dir = dir.join(out);
+        let mut args = vec!["lyap"];
+        args.extend_from_slice(model);
+        args.extend_from_slice(&[
+            "--params",
+            paper.to_str().unwrap(),
+            "--x0",
+            "0.05,0,0,0,0,0,0",
+            "--gains",
+            "3000,100,1500",
+            "--f-max",
+            "400",
+            "--integrator",
+            "dopri",
+            "--iterations",
+            "20",
+            "--quiet",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        let run = twv(&args);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        out_dir
+    };
+    let ir = ir.to_str().unwrap();
+    let jit = spectrum(&["--ir", ir, "--runtime", "jit"], "jit");
+    let interpreted = spectrum(&["--ir", ir, "--runtime", "interpreter"], "interpreter");
+    let shipped = spectrum(&["--model", "vehicle7"], "shipped");
+    for file in ["lyapunov.json", "running.csv"] {
+        let read = |d: &std::path::Path| std::fs::read(d.join(file)).unwrap();
+        assert_eq!(read(&jit), read(&interpreted), "{file}: JIT vs interpreter");
+    }
+    let exponents = |d: &std::path::Path| {
+        let v: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(d.join("lyapunov.json")).unwrap()).unwrap();
+        (v["exponents"].clone(), v["mean_trace"].clone())
+    };
+    // The spectrum and ⟨tr J⟩ (the Σλ check) to the last bit.
+    assert_eq!(
+        exponents(&jit),
+        exponents(&shipped),
+        "JIT vs generated code"
+    );
+    assert!(exponents(&jit).0.as_array().is_some_and(|e| !e.is_empty()));
+    // An unknown runtime is a usage error naming the value.
+    let bad = twv(&[
+        "eval",
+        "--ir",
+        ir,
+        "--x",
+        "0,0,0,0,0,0,0",
+        "--runtime",
+        "llvm",
+    ]);
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("llvm"));
+}
+
 #[test]
 fn malformed_toml_names_the_file() {
     let dir = scratch("malformed");

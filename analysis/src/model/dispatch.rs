@@ -40,8 +40,8 @@ impl<T: ModelTask> ModelVisitor for Visit<'_, T> {
     }
 }
 
-/// Runs `task` on the resolved model: generated code for a shipped model, the interpreter for
-/// an IR.
+/// Runs `task` on the resolved model: generated code for a shipped model, the interpreter or
+/// the IR's native code otherwise.
 pub fn dispatch<T: ModelTask>(resolved: &ResolvedModel, task: T) -> Result<T::Output> {
     let visitor = Visit { task, resolved };
     match &resolved.engine {
@@ -50,11 +50,15 @@ pub fn dispatch<T: ModelTask>(resolved: &ResolvedModel, task: T) -> Result<T::Ou
                 model: name.clone(),
                 reason: e.to_string(),
             })?,
-        Engine::Interpreted => twv_ir::visit_interpreted(&resolved.ir, &resolved.params, visitor)
-            .map_err(|e| match e {
-            twv_ir::VisitError::Size(s) => Error::Size(s),
-            twv_ir::VisitError::Model(m) => Error::Model(m),
-        })?,
+        Engine::Interpreted | Engine::Jit => {
+            let native = resolved.native.clone();
+            twv_ir::visit_interpreted(&resolved.ir, &resolved.params, native, visitor).map_err(
+                |e| match e {
+                    twv_ir::VisitError::Size(s) => Error::Size(s),
+                    twv_ir::VisitError::Model(m) => Error::Model(m),
+                },
+            )?
+        }
     }
 }
 
@@ -115,13 +119,26 @@ pub fn dispatch_control<T: ControlTask>(
             "segway7" => with_na!(Segway7::new(fixed(values(Segway7::NP)?)), 7, 2),
             other => Err(no_pitch(other)),
         },
-        Engine::Interpreted => {
+        Engine::Interpreted | Engine::Jit => {
             let ir = &resolved.ir;
+            let native = resolved.native.clone();
             // Interpreted models take MAX_NU inputs, their own first (see `twv_ir::Interpreted`).
             match (ir.nx(), ir.nu()) {
-                (8, 1 | 2) => with_na!(Interpreted::<8, MAX_NU>::new(ir, params)?, 8, MAX_NU),
-                (7, 1 | 2) => with_na!(Interpreted::<7, MAX_NU>::new(ir, params)?, 7, MAX_NU),
-                (4, 1 | 2) => with_na!(Interpreted::<4, MAX_NU>::new(ir, params)?, 4, MAX_NU),
+                (8, 1 | 2) => with_na!(
+                    Interpreted::<8, MAX_NU>::with_native(ir, params, native)?,
+                    8,
+                    MAX_NU
+                ),
+                (7, 1 | 2) => with_na!(
+                    Interpreted::<7, MAX_NU>::with_native(ir, params, native)?,
+                    7,
+                    MAX_NU
+                ),
+                (4, 1 | 2) => with_na!(
+                    Interpreted::<4, MAX_NU>::with_native(ir, params, native)?,
+                    4,
+                    MAX_NU
+                ),
                 _ => Err(no_pitch(&resolved.origin)),
             }
         }

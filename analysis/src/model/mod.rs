@@ -6,11 +6,12 @@ mod dispatch;
 mod vector;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 pub use dispatch::{dispatch, dispatch_control, ControlTask, ModelTask};
 pub use vector::{check_vector, input_vector, state_vector};
 
-use twv_ir::Ir;
+use twv_ir::{Ir, NativeCode};
 
 use crate::error::{Error, Result};
 
@@ -50,6 +51,42 @@ pub enum ParamSource {
     },
 }
 
+/// A compiler of an IR to native code with the interpreter's bits (`twv_jit::compile`). A front
+/// end that links one passes it in [`IrRuntime::Compiled`]; this library does not depend on a
+/// code generator, so that it builds the same with or without.
+#[derive(Clone, Copy)]
+pub struct Compiler {
+    /// Its name in messages (compilers are equal when their names are).
+    pub name: &'static str,
+    /// Compiles an IR, or says why it cannot.
+    pub compile: fn(&Ir) -> std::result::Result<Arc<dyn NativeCode>, String>,
+}
+
+impl PartialEq for Compiler {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
+}
+
+impl Eq for Compiler {}
+
+impl std::fmt::Debug for Compiler {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Compiler({})", self.name)
+    }
+}
+
+/// How a model without generated code (an IR file, an IR in memory, the bicycle) runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum IrRuntime {
+    /// The IR interpreter: the reference.
+    #[default]
+    Interpreter,
+    /// Compiled to native code by this compiler when the model is resolved (milliseconds), with
+    /// the interpreter's bits.
+    Compiled(Compiler),
+}
+
 /// A model and its parameters: what every job starts from.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct ModelSpec {
@@ -57,6 +94,8 @@ pub struct ModelSpec {
     pub model: ModelSource,
     /// The parameter values. Default the IR's.
     pub params: ParamSource,
+    /// How a model without generated code runs. Default the interpreter.
+    pub runtime: IrRuntime,
 }
 
 /// How a resolved model is evaluated.
@@ -66,6 +105,8 @@ pub enum Engine {
     Generated(String),
     /// The IR interpreter.
     Interpreted,
+    /// The IR compiled to native code at run time ([`ResolvedModel::native`]).
+    Jit,
 }
 
 /// A resolved model: its IR (names, metadata), how it runs, and validated parameter values.
@@ -82,6 +123,8 @@ pub struct ResolvedModel {
     pub params: Vec<f64>,
     /// Where the values came from (a file, or a description of the defaults).
     pub params_origin: String,
+    /// The native code of [`Engine::Jit`].
+    pub native: Option<Arc<dyn NativeCode>>,
 }
 
 /// The default parameter source of a shipped vehicle: `paper` (the text of vehicles/paper.toml)
@@ -115,6 +158,7 @@ impl ModelSpec {
         Self {
             model: ModelSource::Shipped(name.to_string()),
             params: ParamSource::Defaults,
+            runtime: IrRuntime::default(),
         }
     }
 
@@ -166,12 +210,23 @@ impl ModelSpec {
                 origin.clone(),
             ),
         };
+        let (engine, native) = match (engine, self.runtime) {
+            (Engine::Interpreted, IrRuntime::Compiled(compiler)) => {
+                let code = (compiler.compile)(&ir).map_err(|reason| Error::Unsupported {
+                    model: ir.model().to_string(),
+                    reason,
+                })?;
+                (Engine::Jit, Some(code))
+            }
+            (engine, _) => (engine, None),
+        };
         Ok(ResolvedModel {
             engine,
             origin,
             ir,
             params,
             params_origin,
+            native,
         })
     }
 }
@@ -288,12 +343,12 @@ impl ResolvedModel {
     pub fn source_label(&self) -> String {
         match &self.engine {
             Engine::Generated(_) => "shipped".to_string(),
-            Engine::Interpreted => self.origin.clone(),
+            Engine::Interpreted | Engine::Jit => self.origin.clone(),
         }
     }
 
-    /// The IR file path, for an interpreted model read from a file.
+    /// The IR file path, for a model read from an IR file.
     pub fn ir_path(&self) -> Option<&Path> {
-        matches!(self.engine, Engine::Interpreted).then(|| Path::new(&self.origin))
+        (!self.is_shipped()).then(|| Path::new(&self.origin))
     }
 }

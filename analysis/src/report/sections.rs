@@ -36,6 +36,7 @@ fn vehicle(settings: &ReportSettings, name: &str) -> Result<ResolvedModel> {
     ModelSpec {
         model: ModelSource::Shipped(name.to_string()),
         params,
+        ..ModelSpec::default()
     }
     .resolve()
 }

@@ -184,6 +184,12 @@ pub enum ModelError {
     },
     #[error(transparent)]
     Params(#[from] ParamError),
+    #[error("{file}: native code compiled from IR {compiled} given for IR {ir}")]
+    NativeCode {
+        file: String,
+        compiled: String,
+        ir: String,
+    },
 }
 
 /// A work vector too short for the function evaluated into it.

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use twv_model::{Mechanical, Model, ModelInfo};
 
 use crate::error::{ModelError, WorkTooShort};
+use crate::native::NativeCode;
 use crate::params::check_values;
 use crate::types::{Function, Instr, Ir, Output};
 
@@ -52,6 +53,8 @@ struct Program {
     /// that the generated code uses (`twv_kernels::columns`).
     jw_columns: Vec<(usize, Vec<Option<usize>>)>,
     work_len: usize,
+    /// Native code for the functions (run-time compiled), or `None`: interpret them.
+    native: Option<Arc<dyn NativeCode>>,
 }
 
 fn leak(s: &str) -> &'static str {
@@ -68,7 +71,7 @@ fn leak_names<'a>(names: impl Iterator<Item = &'a String>) -> &'static [&'static
 }
 
 impl Program {
-    fn new(ir: &Ir) -> Self {
+    fn new(ir: &Ir, native: Option<Arc<dyn NativeCode>>) -> Self {
         let info = ModelInfo {
             name: leak(ir.model()),
             ir_hash: leak(ir.hash()),
@@ -76,16 +79,9 @@ impl Program {
             inputs: leak_names(ir.inputs().iter().map(|s| &s.name)),
             params: leak_names(ir.params().iter().map(|p| &p.name)),
         };
-        // Value ids in `f_jac_x` instead of the stored entries' CCS indices.
-        let jw_columns = ir.output("f_jac_x", "jac_x").map_or_else(Vec::new, |jac| {
-            let mut columns = jac.stored_columns();
-            for (_, rows) in &mut columns {
-                for e in rows.iter_mut().flatten() {
-                    *e = jac.values[*e];
-                }
-            }
-            columns
-        });
+        let jw_columns = ir
+            .output("f_jac_x", "jac_x")
+            .map_or_else(Vec::new, Output::stored_column_values);
         let work_len = ir
             .functions()
             .values()
@@ -97,12 +93,14 @@ impl Program {
             info,
             jw_columns,
             work_len,
+            native,
         }
     }
 }
 
 /// A model evaluated by interpreting its IR: implements [`Model`] (and [`Mechanical`] for
-/// multibody models) with the same numbers as the generated code.
+/// multibody models) with the same numbers as the generated code. Given native code compiled
+/// from the IR ([`Interpreted::with_native`]), it runs that instead, with the same bits.
 ///
 /// `NX` is the IR's number of states; `NU` may exceed its number of inputs: the extra inputs are
 /// padding that the equations never read (their columns of ∂f/∂u are zero, and
@@ -120,6 +118,16 @@ pub struct Interpreted<const NX: usize, const NU: usize> {
 impl<const NX: usize, const NU: usize> Interpreted<NX, NU> {
     /// A model of `ir` with parameter values `params` (validated like a parameter file's).
     pub fn new(ir: &Ir, params: &[f64]) -> Result<Self, ModelError> {
+        Self::with_native(ir, params, None)
+    }
+
+    /// A model of `ir` with parameter values `params` that runs `native`, code compiled from
+    /// `ir` (checked by its hash), instead of interpreting (`None`: interpret).
+    pub fn with_native(
+        ir: &Ir,
+        params: &[f64],
+        native: Option<Arc<dyn NativeCode>>,
+    ) -> Result<Self, ModelError> {
         let size = |what, found, expected| {
             if found == expected {
                 Ok(())
@@ -136,7 +144,16 @@ impl<const NX: usize, const NU: usize> Interpreted<NX, NU> {
         if ir.nu() > NU {
             size("inputs", ir.nu(), NU)?;
         }
-        let program = Arc::new(Program::new(ir));
+        if let Some(code) = &native {
+            if code.ir_hash() != ir.hash() {
+                return Err(ModelError::NativeCode {
+                    file: ir.file().to_string(),
+                    compiled: code.ir_hash().to_string(),
+                    ir: ir.hash().to_string(),
+                });
+            }
+        }
+        let program = Arc::new(Program::new(ir, native));
         Self::from_program(program, params)
     }
 
@@ -165,6 +182,11 @@ impl<const NX: usize, const NU: usize> Interpreted<NX, NU> {
         &self.program.ir
     }
 
+    /// Whether the functions run as native code rather than interpreted.
+    pub fn is_native(&self) -> bool {
+        self.program.native.is_some()
+    }
+
     /// The parameter values, in IR order.
     pub fn params(&self) -> &[f64] {
         &self.params
@@ -191,7 +213,9 @@ impl<const NX: usize, const NU: usize> Interpreted<NX, NU> {
         let Ok(mut work) = self.work.try_borrow_mut() else {
             return false;
         };
-        if f.eval(x, u, &self.params, &mut work).is_err() {
+        let native = self.program.native.as_ref();
+        let compiled = native.is_some_and(|n| n.eval(function, x, u, &self.params, &mut work));
+        if !compiled && f.eval(x, u, &self.params, &mut work).is_err() {
             return false;
         }
         read(f, &work);
@@ -229,6 +253,9 @@ impl<const NX: usize, const NU: usize> Interpreted<NX, NU> {
     }
 
     fn vector<const R: usize>(&self, function: &str, x: &[f64], u: &[f64], out: &mut [f64; R]) {
+        if self.native_dense(function, (x, u), (R, 1, 1), out) {
+            return;
+        }
         if !self.dense((function, function), (x, u), (R, 1), |r, _, v| out[r] = v) {
             out.fill(f64::NAN);
         }
@@ -244,6 +271,10 @@ impl<const NX: usize, const NU: usize> Interpreted<NX, NU> {
         out: &mut [[f64; C]; R],
     ) {
         out.iter_mut().for_each(|row| row.fill(0.0));
+        let shape = (R, cols, C);
+        if cols <= C && self.native_dense(function, (x, u), shape, out.as_flattened_mut()) {
+            return;
+        }
         if cols > C
             || !self.dense((function, function), (x, u), (R, cols), |r, c, v| {
                 out[r][c] = v
@@ -251,6 +282,19 @@ impl<const NX: usize, const NU: usize> Interpreted<NX, NU> {
         {
             out.iter_mut().for_each(|row| row.fill(f64::NAN));
         }
+    }
+
+    /// The native code's dense routine of `function`, if there is one (see
+    /// [`NativeCode::dense`]).
+    fn native_dense(
+        &self,
+        function: &str,
+        (x, u): (&[f64], &[f64]),
+        shape: (usize, usize, usize),
+        out: &mut [f64],
+    ) -> bool {
+        let native = self.program.native.as_ref();
+        native.is_some_and(|n| n.dense(function, (x, u, &self.params), shape, out))
     }
 
     fn jac_output(&self) -> Option<&Output> {
@@ -307,14 +351,39 @@ impl<const NX: usize, const NU: usize> Model<NX, NU> for Interpreted<NX, NU> {
         // of `f_jac_x` (every division goes through the same lowering) at a fraction of the
         // work (the bicycle: 5k operations instead of 33k).
         if K == 0 {
-            return self.vector("f", x, u, f);
+            return self.f(x, u, f);
+        }
+        self.f_jw_trace(x, u, w, f, out);
+    }
+
+    /// The trace as the generated code sums it: 0.0 plus the stored diagonal entries of
+    /// `f_jac_x`'s ∂f/∂x in order, from the same evaluation as f and J·W.
+    fn f_jw_trace<const K: usize>(
+        &self,
+        x: &[f64; NX],
+        u: &[f64; NU],
+        w: &[[f64; NX]; K],
+        f: &mut [f64; NX],
+        out: &mut [[f64; NX]; K],
+    ) -> f64 {
+        if let Some(native) = &self.program.native {
+            let (wf, of) = (w.as_flattened(), out.as_flattened_mut());
+            if let Some(trace) = native.f_jw((x, u, &self.params), (wf, K), f, of) {
+                return trace;
+            }
         }
         let p = &*self.program;
+        let mut trace = f64::NAN;
         let ran = self.run("f_jac_x", x, u, |func, vals| {
             f.fill(0.0);
             if let Some(o) = func.output("f") {
                 o.entries().for_each(|(r, _, v)| f[r] = vals[v]);
             }
+            trace = func.output("jac_x").map_or(0.0, |o| {
+                o.entries()
+                    .filter(|(r, c, _)| r == c)
+                    .fold(0.0, |sum, (_, _, v)| sum + vals[v])
+            });
             for (wk, ok) in w.iter().zip(out.iter_mut()) {
                 // The generated code's operations: the first column's products, then each
                 // further column's products added, structural zeros as 0.0.
@@ -331,6 +400,7 @@ impl<const NX: usize, const NU: usize> Model<NX, NU> for Interpreted<NX, NU> {
             f.fill(f64::NAN);
             out.iter_mut().for_each(|row| row.fill(f64::NAN));
         }
+        trace
     }
 }
 
@@ -399,7 +469,7 @@ macro_rules! dispatch_sizes {
     }};
     (@nu $ir:ident, $params:ident, $visitor:ident, $nx:literal, [$($nu:literal),*]) => {
         match MAX_NU {
-            $($nu => Ok($visitor.visit(Interpreted::<$nx, $nu>::new($ir, $params)?)),)*
+            $($nu => Ok($visitor.visit(Interpreted::<$nx, $nu>::with_native($ir, $params.0, $params.1)?)),)*
             _ => Err(unsupported($ir)),
         }
     };
@@ -420,17 +490,19 @@ fn unsupported(ir: &Ir) -> VisitError {
     })
 }
 
-/// Run `visitor` on the interpreted model of `ir` with `params` (IR order), choosing the const
+/// Run `visitor` on the interpreted model of `ir` with `params` (IR order) and optional
+/// `native` code (see [`Interpreted::with_native`]), choosing the const
 /// size `NX` from the IR at run time: how `--ir FILE` reaches code generic over [`Model`]. Each
 /// state count instantiates the visitor once (1 to 12), always with `NU` = 4 inputs, the real
 /// ones followed by padding (see [`Interpreted`]), so this costs the caller 12 instantiations.
 pub fn visit_interpreted<V: twv_model::ModelVisitor>(
     ir: &Ir,
     params: &[f64],
+    native: Option<Arc<dyn NativeCode>>,
     visitor: V,
 ) -> Result<V::Output, VisitError> {
     if ir.nu() > MAX_NU {
         return Err(unsupported(ir));
     }
-    dispatch_sizes!(ir, params, visitor; 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12; [4])
+    dispatch_sizes!(ir, (params, native), visitor; 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12; [4])
 }

@@ -12,6 +12,7 @@ mod hash;
 mod infix;
 mod interp;
 mod lower;
+mod native;
 pub mod ops;
 mod params;
 mod types;
@@ -25,6 +26,7 @@ pub use error::{
 pub use hash::{content_hash, rehash, sha256_hex, HASH_PLACEHOLDER};
 pub use infix::{formulas, Formulas};
 pub use interp::{visit_interpreted, Interpreted, UnsupportedSize, VisitError, MAX_NU, MAX_NX};
+pub use native::NativeCode;
 pub use ops::{BinaryOp, UnaryOp};
 pub use params::{check_values, load_params, parse_params};
 pub use types::{

@@ -197,6 +197,18 @@ impl Output {
             .collect()
     }
 
+    /// [`stored_columns`](Self::stored_columns) with each entry's value id instead of its CCS
+    /// index: what the J·W of the interpreter and the JIT multiply by.
+    pub fn stored_column_values(&self) -> Vec<(usize, Vec<Option<usize>>)> {
+        let mut columns = self.stored_columns();
+        for (_, rows) in &mut columns {
+            for e in rows.iter_mut().flatten() {
+                *e = self.values[*e];
+            }
+        }
+        columns
+    }
+
     /// Whether two outputs store the same entries (same shape and pattern).
     pub fn same_sparsity(&self, other: &Output) -> bool {
         self.rows == other.rows

@@ -12,7 +12,7 @@ use twv_model::{Mechanical, Model};
 
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 
-fn shipped_ir(name: &str) -> Ir {
+pub(crate) fn shipped_ir(name: &str) -> Ir {
     let text = twv_generated::ir_json(name).expect("shipped model");
     twv_ir::parse_ir(text, &format!("generated/ir/{name}.json")).expect("shipped IR is valid")
 }
@@ -46,7 +46,7 @@ fn assert_close(a: &[f64], b: &[f64], tol: f64, what: &str) {
 }
 
 /// Every `Model` method of `a` and `b` agrees bit for bit at random points.
-fn same_model<const NX: usize, const NU: usize>(
+pub(crate) fn same_model<const NX: usize, const NU: usize>(
     a: &impl Model<NX, NU>,
     b: &impl Model<NX, NU>,
     what: &str,
@@ -91,6 +91,17 @@ fn same_model<const NX: usize, const NU: usize>(
             oa.as_flattened(),
             ob.as_flattened(),
             &format!("{what} f_jw"),
+        );
+        // The trace for Σλ = ⟨tr J⟩, with f and J·W from the same evaluation.
+        let (mut f4, mut o4) = ([0.0; NX], [[0.0; NX]; 3]);
+        let trace_a = a.f_jw_trace(&x, &u, &w, &mut f4, &mut o4);
+        let trace_b = b.f_jw_trace(&x, &u, &w, &mut f2b, &mut ob);
+        assert_bits(&[trace_a], &[trace_b], &format!("{what} f_jw_trace trace"));
+        assert_bits(&f4, &f2b, &format!("{what} f_jw_trace f"));
+        assert_bits(
+            o4.as_flattened(),
+            ob.as_flattened(),
+            &format!("{what} f_jw_trace jw"),
         );
         // The fused f_jw + jac_u (one kernel in generated code, two calls by default).
         let (mut f3, mut o3, mut u3) = ([0.0; NX], [[0.0; NX]; 3], [[0.0; NU]; NX]);
@@ -142,7 +153,7 @@ fn same_model<const NX: usize, const NU: usize>(
 }
 
 /// Every `Mechanical` method of `a` and `b` agrees bit for bit at random points.
-fn same_mechanics<const NX: usize, const NU: usize, const NS: usize>(
+pub(crate) fn same_mechanics<const NX: usize, const NU: usize, const NS: usize>(
     a: &impl Mechanical<NX, NU, NS>,
     b: &impl Mechanical<NX, NU, NS>,
     what: &str,
@@ -469,7 +480,7 @@ fn visit_interpreted_dispatches_ir_sizes() {
         }
     }
     let ir = shipped_ir("segway7");
-    let (nx, nu, rate) = twv_ir::visit_interpreted(&ir, &ir.defaults(), FirstRate).unwrap();
+    let (nx, nu, rate) = twv_ir::visit_interpreted(&ir, &ir.defaults(), None, FirstRate).unwrap();
     let mut f = [0.0; 7];
     Segway7::with_defaults().f(&[0.1; 7], &[1.0; 2], &mut f);
     // Every interpreted model gets MAX_NU inputs: segway7's two, then padding it never reads.
@@ -477,7 +488,7 @@ fn visit_interpreted_dispatches_ir_sizes() {
         (nx, nu, rate.to_bits()),
         (7, twv_ir::MAX_NU, f[6].to_bits())
     );
-    let err = twv_ir::visit_interpreted(&ir, &[1.0], FirstRate).unwrap_err();
+    let err = twv_ir::visit_interpreted(&ir, &[1.0], None, FirstRate).unwrap_err();
     assert!(err.to_string().contains("16 parameters"), "{err}");
 }
 
@@ -936,13 +947,13 @@ mod parameter_files {
 
 /// Every operation of twv-ir/1, emitted and interpreted, agrees bit for bit (NaN with NaN),
 /// including those no shipped model uses yet. The fixture's output i applies operation i.
-mod all_operations {
+pub(crate) mod all_operations {
     use twv_ir::{BinaryOp, Interpreted, UnaryOp};
     use twv_model::Model;
 
     twv_macros::twv_model!(ir = "codegen/emit/tests/all_ops.json", name = AllOps);
 
-    const NX: usize = 46;
+    pub(crate) const NX: usize = 46;
 
     #[test]
     fn the_fixture_covers_every_operation() {
@@ -955,12 +966,21 @@ mod all_operations {
         assert_eq!(names, all);
     }
 
+    /// The fixture's IR.
+    pub(crate) fn fixture() -> twv_ir::Ir {
+        twv_ir::load_ir(format!("{}/codegen/emit/tests/all_ops.json", super::ROOT)).unwrap()
+    }
+
     #[test]
     fn every_operation_matches_the_interpreter() {
-        let ir =
-            twv_ir::load_ir(format!("{}/codegen/emit/tests/all_ops.json", super::ROOT)).unwrap();
-        let interpreted = Interpreted::<NX, 0>::with_defaults(&ir).unwrap();
-        let generated = AllOps::with_defaults();
+        let interpreted = Interpreted::<NX, 0>::with_defaults(&fixture()).unwrap();
+        same_operations(&AllOps::with_defaults(), &interpreted, "generated");
+    }
+
+    /// `a` (named `what`) and the interpreter `b` agree on every operation of the fixture at
+    /// every pair of sample operands (zeros of both signs, infinities, NaN, domain edges), NaN
+    /// with NaN.
+    pub(crate) fn same_operations(a: &impl Model<NX, 0>, b: &impl Model<NX, 0>, what: &str) {
         let samples = [
             -2.5,
             -1.0,
@@ -983,18 +1003,19 @@ mod all_operations {
                     let k = if equal_neighbours { shift } else { i + shift };
                     samples[k % samples.len()]
                 });
-                let (mut a, mut b) = ([0.0; NX], [0.0; NX]);
-                generated.f(&x, &[], &mut a);
-                interpreted.f(&x, &[], &mut b);
+                let (mut fa, mut fb) = ([0.0; NX], [0.0; NX]);
+                a.f(&x, &[], &mut fa);
+                b.f(&x, &[], &mut fb);
                 for i in 0..NX {
-                    let same = a[i].to_bits() == b[i].to_bits() || (a[i].is_nan() && b[i].is_nan());
+                    let same =
+                        fa[i].to_bits() == fb[i].to_bits() || (fa[i].is_nan() && fb[i].is_nan());
                     assert!(
                         same,
-                        "{} at {:?}: generated {:e}, interpreted {:e}",
+                        "{} at {:?}: {what} {:e}, interpreted {:e}",
                         AllOps::INFO.states[i],
                         (x[i], x[(i + 1) % NX]),
-                        a[i],
-                        b[i]
+                        fa[i],
+                        fb[i]
                     );
                 }
             }

@@ -134,6 +134,7 @@ mod audit {
         ModelSpec {
             model: ModelSource::Shipped(model.into()),
             params,
+            ..ModelSpec::default()
         }
         .resolve()
         .unwrap()
@@ -186,6 +187,7 @@ mod audit {
         let model = ModelSpec {
             model: ModelSource::IrFile(repo("generated/ir/vehicle7.json")),
             params: ParamSource::File(repo("vehicles/segway.toml")),
+            ..ModelSpec::default()
         }
         .resolve()
         .unwrap();

@@ -14,6 +14,7 @@ mod control;
 mod hand_file;
 mod hand_model;
 mod isa;
+mod jit;
 mod linear;
 mod lyapunov;
 mod lyapunov_parts;

@@ -72,6 +72,7 @@ pub fn run(args: &AuditArgs, ctx: &Context) -> Result<Outcome> {
                 model: Some(name.to_string()),
                 ir: None,
                 params: args.params.clone(),
+                runtime: None,
             }
             .resolve(ctx)?;
             Ok(audit_model(&model, &settings)?)
@@ -120,6 +121,7 @@ fn run_hand(args: &AuditArgs, hand: &std::path::Path, ctx: &Context) -> Result<O
         model,
         ir: args.ir.clone(),
         params: args.params.clone(),
+        runtime: None,
     }
     .resolve(ctx)?;
     let report = audit_hand(&model, &HandSource::Text { text, origin }, &settings)?;

@@ -1,0 +1,226 @@
+//! The Cranelift IR of the routines: an IR function's instructions as one straight-line block,
+//! and the three ways its values leave it (into the interpreter's work vector, as a dense ẋ,
+//! as ẋ with J·W and the trace).
+
+use cranelift_codegen::ir::{types, FuncRef, InstBuilder, MemFlagsData, Value};
+use cranelift_frontend::FunctionBuilder;
+use twv_ir::{BinaryOp, Function, Instr, Output, UnaryOp};
+
+/// The routines' memory accesses: the slices are valid for what they read and write (checked
+/// by the caller), aligned, and never alias each other.
+const MEMORY: MemFlagsData = MemFlagsData::trusted();
+
+/// The interpreter's helpers, as references inside the function being built.
+pub struct Helpers {
+    pub unary: FuncRef,
+    pub binary: FuncRef,
+}
+
+/// The byte offset of entry `index` of an f64 slice (bounded by the size check of
+/// `JitCode::new`).
+fn offset(index: usize) -> i32 {
+    (index * 8) as i32
+}
+
+/// Where values go as soon as they exist: `sinks[k]` lists (base pointer, byte offset) pairs
+/// for value `k`. Storing a value at once, rather than after the whole function, keeps it out
+/// of the register allocator's way: a value live across the bicycle's 33 000 instructions and
+/// their calls made its J·W routine 7x slower.
+pub type Sinks = Vec<Vec<(Value, i32)>>;
+
+/// Emits every instruction of `function` in order, reading x, u, p through `args` and storing
+/// each value where `sinks` says.
+pub fn values(
+    b: &mut FunctionBuilder<'_>,
+    helpers: &Helpers,
+    function: &Function,
+    args: [Value; 3],
+    sinks: &Sinks,
+) {
+    let mut values: Vec<Value> = Vec::with_capacity(function.n_values());
+    for (instr, sinks) in function.instructions().iter().zip(sinks) {
+        let value = match *instr {
+            Instr::Input { arg, index } => {
+                b.ins()
+                    .load(types::F64, MEMORY, args[arg.number()], offset(index))
+            }
+            Instr::Const(c) => b.ins().f64const(c),
+            Instr::Unary(op, a) => unary(b, helpers.unary, op, values[a]),
+            Instr::Binary(op, l, r) => binary(b, helpers.binary, op, values[l], values[r]),
+        };
+        for &(base, at) in sinks {
+            b.ins().store(MEMORY, value, base, at);
+        }
+        values.push(value);
+    }
+}
+
+/// Sinks that store every value an output of `function` reads at `work[id]`.
+pub fn work_sinks(function: &Function, work: Value) -> Sinks {
+    let mut sinks: Sinks = vec![Vec::new(); function.n_values()];
+    for output in function.outputs() {
+        for &id in &output.values {
+            if sinks[id].is_empty() {
+                sinks[id].push((work, offset(id)));
+            }
+        }
+    }
+    sinks
+}
+
+/// The address of each of `rows` rows of a row-major matrix at `base` whose row stride (in
+/// entries) is the run-time value `stride`.
+pub fn row_pointers(
+    b: &mut FunctionBuilder<'_>,
+    base: Value,
+    stride: Value,
+    rows: usize,
+) -> Vec<Value> {
+    let row_bytes = b.ins().imul_imm_u(stride, 8);
+    let mut row = base;
+    let mut out = Vec::with_capacity(rows);
+    for r in 0..rows {
+        if r > 0 {
+            row = b.ins().iadd(row, row_bytes);
+        }
+        out.push(row);
+    }
+    out
+}
+
+/// Adds sinks that write output `output` densely, row `r` at `rows[r]`, and stores 0.0 now in
+/// the cells it has no entry for.
+pub fn dense_sinks(
+    b: &mut FunctionBuilder<'_>,
+    sinks: &mut Sinks,
+    output: &Output,
+    rows: &[Value],
+) {
+    let mut has = vec![vec![false; output.cols]; output.rows];
+    for (r, c, v) in output.entries() {
+        sinks[v].push((rows[r], offset(c)));
+        has[r][c] = true;
+    }
+    let zero = b.ins().f64const(0.0);
+    for (r, row) in has.iter().enumerate() {
+        for (c, _) in row.iter().enumerate().filter(|(_, h)| !**h) {
+            b.ins().store(MEMORY, zero, rows[r], offset(c));
+        }
+    }
+}
+
+/// Loads `base[index]` (a value stored by a sink).
+pub fn load(b: &mut FunctionBuilder<'_>, base: Value, index: usize) -> Value {
+    b.ins().load(types::F64, MEMORY, base, offset(index))
+}
+
+/// tr(∂f/∂x) as the generated code sums it: 0.0, then each stored diagonal entry in order
+/// (read back from `entries`, the stored entries of `jac` in order).
+pub fn trace(b: &mut FunctionBuilder<'_>, entries: Value, jac: &Output) -> Value {
+    let mut sum = b.ins().f64const(0.0);
+    for (e, (r, c, _)) in jac.entries().enumerate() {
+        if r == c {
+            let entry = load(b, entries, e);
+            sum = b.ins().fadd(sum, entry);
+        }
+    }
+    sum
+}
+
+/// The loop `for k in 0..count { out[k] = J · w[k] }` (rows of `nx`), with the interpreter's
+/// operations: column by column over the stored columns `columns` (indices of stored entries,
+/// read back from `entries`; `None` a structural zero, multiplied as 0.0), the first column's
+/// products, then each further one added. Leaves the builder in the block after the loop.
+pub fn jw_loop(
+    b: &mut FunctionBuilder<'_>,
+    entries: Value,
+    columns: &[(usize, Vec<Option<usize>>)],
+    nx: usize,
+    (w, count, out): (Value, Value, Value),
+) {
+    let header = b.create_block();
+    let body = b.create_block();
+    let exit = b.create_block();
+    let k = b.append_block_param(header, types::I64);
+    let start = b.ins().iconst(types::I64, 0);
+    b.ins().jump(header, &[start.into()]);
+
+    b.switch_to_block(header);
+    let more = b.ins().icmp(
+        cranelift_codegen::ir::condcodes::IntCC::UnsignedLessThan,
+        k,
+        count,
+    );
+    b.ins().brif(more, body, &[], exit, &[]);
+
+    b.switch_to_block(body);
+    b.seal_block(body);
+    let row_bytes = b.ins().imul_imm_u(k, (nx * 8) as i64);
+    let w_row = b.ins().iadd(w, row_bytes);
+    let out_row = b.ins().iadd(out, row_bytes);
+    let zero = b.ins().f64const(0.0);
+    let mut slots = vec![zero; nx];
+    for (n, (c, column)) in columns.iter().enumerate() {
+        let wc = b.ins().load(types::F64, MEMORY, w_row, offset(*c));
+        for (slot, entry) in slots.iter_mut().zip(column) {
+            let j = match entry {
+                Some(e) => load(b, entries, *e),
+                None => zero,
+            };
+            let term = b.ins().fmul(j, wc);
+            *slot = if n == 0 {
+                term
+            } else {
+                b.ins().fadd(*slot, term)
+            };
+        }
+    }
+    for (r, value) in slots.into_iter().enumerate() {
+        b.ins().store(MEMORY, value, out_row, offset(r));
+    }
+    let next = b.ins().iadd_imm_u(k, 1);
+    b.ins().jump(header, &[next.into()]);
+    b.seal_block(header);
+
+    b.switch_to_block(exit);
+    b.seal_block(exit);
+}
+
+fn unary(b: &mut FunctionBuilder<'_>, helper: FuncRef, op: UnaryOp, a: Value) -> Value {
+    match op {
+        UnaryOp::Neg => b.ins().fneg(a),
+        UnaryOp::Sqrt => b.ins().sqrt(a),
+        UnaryOp::Fabs => b.ins().fabs(a),
+        UnaryOp::Sq => b.ins().fmul(a, a),
+        UnaryOp::Twice => {
+            let two = b.ins().f64const(2.0);
+            b.ins().fmul(two, a)
+        }
+        UnaryOp::Inv => {
+            let one = b.ins().f64const(1.0);
+            b.ins().fdiv(one, a)
+        }
+        _ => {
+            let number = UnaryOp::ALL.iter().position(|o| *o == op).unwrap_or(0);
+            let number = b.ins().iconst(types::I32, number as i64);
+            let call = b.ins().call(helper, &[number, a]);
+            b.inst_results(call)[0]
+        }
+    }
+}
+
+fn binary(b: &mut FunctionBuilder<'_>, helper: FuncRef, op: BinaryOp, l: Value, r: Value) -> Value {
+    match op {
+        BinaryOp::Add => b.ins().fadd(l, r),
+        BinaryOp::Sub => b.ins().fsub(l, r),
+        BinaryOp::Mul => b.ins().fmul(l, r),
+        BinaryOp::Div => b.ins().fdiv(l, r),
+        BinaryOp::Copysign => b.ins().fcopysign(l, r),
+        _ => {
+            let number = BinaryOp::ALL.iter().position(|o| *o == op).unwrap_or(0);
+            let number = b.ins().iconst(types::I32, number as i64);
+            let call = b.ins().call(helper, &[number, l, r]);
+            b.inst_results(call)[0]
+        }
+    }
+}

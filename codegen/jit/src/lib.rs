@@ -1,0 +1,565 @@
+//! A model IR compiled to native code at run time, so that a user's model (`--ir FILE`) runs
+//! at compiled speed without rebuilding twv.
+//!
+//! [`compile`] returns the native code of a validated [`Ir`], made with Cranelift as it is
+//! used: each IR function, when first called, becomes a routine that stores the values its
+//! outputs read where the interpreter's work vector has them; and the two hot paths get
+//! routines of their own — `f` written as a dense ẋ, and `f_jac_x` as ẋ, J·W for any number of
+//! tangent vectors and tr ∂f/∂x — so that a time step does not go through the interpreter's
+//! read-out. The result plugs into [`twv_ir::Interpreted::with_native`].
+//!
+//! **The interpreter's bits.** Each instruction becomes one operation on the values before it,
+//! in the IR's order. Addition, subtraction, multiplication, division, square root, negation,
+//! absolute value and copysign are IEEE-754 operations that Cranelift emits as single
+//! instructions (it never fuses a multiply and an add); `sq`, `twice` and `inv` are the
+//! interpreter's `a·a`, `2·a` and `1/a`. Every other operation (the trigonometric functions
+//! through twv's own `sin_cos`, `pow`, comparisons, …) calls [`UnaryOp::apply`] /
+//! [`BinaryOp::apply`], the interpreter's own definition. J·W and the trace are summed in the
+//! interpreter's order. `tests/tests/all/jit.rs` compares every operation and every shipped
+//! model with the interpreter bit for bit.
+
+mod emit;
+
+use std::fmt;
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, OnceLock};
+
+use cranelift_codegen::ir::{
+    types, AbiParam, InstBuilder, Signature, StackSlotData, StackSlotKind, UserFuncName,
+};
+use cranelift_codegen::settings::{self, Configurable};
+use cranelift_codegen::Context;
+use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
+use cranelift_jit::{JITBuilder, JITModule};
+use cranelift_module::{default_libcall_names, FuncId, Linkage, Module};
+use twv_ir::{BinaryOp, Function, Instr, Ir, NativeCode, UnaryOp};
+
+/// Why an IR could not be compiled.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum JitError {
+    /// The code generator does not support this machine.
+    #[error("{file}: the JIT does not support this CPU: {message}")]
+    Host { file: String, message: String },
+    /// Code generation of one function failed.
+    #[error("{file}: function `{function}`: the JIT could not compile it: {message}")]
+    Codegen {
+        file: String,
+        function: String,
+        message: String,
+    },
+}
+
+/// The native code of `ir` (see the crate documentation); an error if the code generator does
+/// not support this CPU.
+pub fn compile(ir: &Ir) -> Result<Arc<dyn NativeCode>, JitError> {
+    Ok(Arc::new(JitCode::new(ir)?))
+}
+
+/// Functions above this many instructions (the bicycle's Jacobians: 33 000) are compiled with
+/// Cranelift's single-pass register allocator: the default (backtracking) one took 2.9 s for
+/// the bicycle against 0.06 s, while for vehicle-sized functions it is fast and its code better.
+const SINGLE_PASS_ABOVE: usize = 4000;
+
+/// (x, u, p, work): an IR function storing its output values in the work vector.
+type Entry = unsafe extern "C" fn(*const f64, *const f64, *const f64, *mut f64);
+
+/// (x, u, p, out, stride): an output written densely, row-major with that row stride.
+type Dense = unsafe extern "C" fn(*const f64, *const f64, *const f64, *mut f64, usize);
+
+/// (x, u, p, w, k, f, out) → tr ∂f/∂x: `f_jac_x` as ẋ, J·W and the trace (the Jacobian's
+/// entries pass through an array on the routine's stack).
+type FJw = unsafe extern "C" fn(
+    *const f64,
+    *const f64,
+    *const f64,
+    *const f64,
+    usize,
+    *mut f64,
+    *mut f64,
+) -> f64;
+
+/// A compiled routine with the extent of what it reads: how many entries of x, u and p.
+struct Routine<E> {
+    entry: E,
+    reads: [usize; 3],
+}
+
+impl<E> Routine<E> {
+    fn reads_within(&self, x: &[f64], u: &[f64], p: &[f64]) -> bool {
+        let [nx, nu, np] = self.reads;
+        x.len() >= nx && u.len() >= nu && p.len() >= np
+    }
+}
+
+/// A routine and the module that owns its executable memory (freed on drop).
+struct Compiled<E> {
+    routine: Routine<E>,
+    module: ManuallyDrop<JITModule>,
+}
+
+impl<E> Drop for Compiled<E> {
+    fn drop(&mut self) {
+        // SAFETY: the routine that points into this memory is dropped with it; none escapes
+        // (the `NativeCode` methods only call it).
+        unsafe { ManuallyDrop::take(&mut self.module).free_memory() };
+    }
+}
+
+// SAFETY: after `finalize_definitions` a module is never mutated again; the code it owns is
+// read-only executable memory whose routine keeps no state (it reads its arguments and writes
+// only the caller's slices), so calling it from several threads is sound.
+unsafe impl<E> Send for Compiled<E> {}
+// SAFETY: as above.
+unsafe impl<E> Sync for Compiled<E> {}
+
+/// A routine compiled on its first use; `None` when the IR has no such function or it could
+/// not be compiled (the interpreter, with the same bits, then runs instead).
+type Lazy<E> = OnceLock<Option<Compiled<E>>>;
+
+/// The native code of one IR: [`NativeCode`] for [`twv_ir::Interpreted::with_native`].
+///
+/// Each routine is compiled when it is first called, in a module of its own, so that a run
+/// pays only for what it uses (a ride of the bicycle compiles its `f`, 5 000 instructions, not
+/// its 80 000).
+pub struct JitCode {
+    ir: Ir,
+    /// Every function, by name, with its value count (the work vector it writes into).
+    functions: Vec<(String, usize, Lazy<Entry>)>,
+    /// The (rows, cols) of each function's output of its own name, if it has one.
+    shapes: Vec<Option<(usize, usize)>>,
+    /// The indices of `f`, `jac_x` and `jac_u`, looked up at every step.
+    hot: [Option<usize>; 3],
+    /// Every function's output of its own name (`f`, `jac_x`, `M`, …) written densely.
+    dense: Vec<Lazy<Dense>>,
+    /// `f_jac_x` as ẋ, J·W and the trace.
+    f_jw: Lazy<FJw>,
+}
+
+impl fmt::Debug for JitCode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let compiled: Vec<&str> = self
+            .functions
+            .iter()
+            .filter(|(.., lazy)| lazy.get().is_some_and(Option::is_some))
+            .map(|(n, ..)| n.as_str())
+            .collect();
+        f.debug_struct("JitCode")
+            .field("ir_hash", &self.ir.hash())
+            .field("compiled", &compiled)
+            .finish()
+    }
+}
+
+/// The interpreter's unary operation number `op` (its index in [`UnaryOp::ALL`]).
+extern "C" fn twv_unary(op: u32, a: f64) -> f64 {
+    UnaryOp::ALL
+        .get(op as usize)
+        .map_or(f64::NAN, |o| o.apply(a))
+}
+
+/// The interpreter's binary operation number `op` (its index in [`BinaryOp::ALL`]).
+extern "C" fn twv_binary(op: u32, a: f64, b: f64) -> f64 {
+    BinaryOp::ALL
+        .get(op as usize)
+        .map_or(f64::NAN, |o| o.apply(a, b))
+}
+
+/// How many entries of x, u and p `function` reads.
+fn reads(function: &Function) -> [usize; 3] {
+    let mut n = [0; 3];
+    for instr in function.instructions() {
+        if let Instr::Input { arg, index } = *instr {
+            n[arg.number()] = n[arg.number()].max(index + 1);
+        }
+    }
+    n
+}
+
+/// What a routine does with the values of its IR function.
+#[derive(Clone, Copy)]
+enum Shape<'a> {
+    /// Store the values the outputs read at their ids in the work vector.
+    Work,
+    /// Store this output densely, row-major, with a row stride given at run time.
+    Dense(&'a twv_ir::Output),
+    /// ẋ, the J·W loop over these columns, the trace of this Jacobian.
+    FJw {
+        f: &'a twv_ir::Output,
+        jac: &'a twv_ir::Output,
+        columns: &'a [(usize, Vec<Option<usize>>)],
+    },
+}
+
+/// One module (one register allocator) and the routines defined in it.
+struct Builder<'a> {
+    ir: &'a Ir,
+    module: JITModule,
+    ctx: Context,
+    builder_ctx: FunctionBuilderContext,
+    unary: FuncId,
+    binary: FuncId,
+    defined: usize,
+}
+
+impl<'a> Builder<'a> {
+    fn new(ir: &'a Ir, single_pass: bool) -> Result<Self, JitError> {
+        let host = |message: String| JitError::Host {
+            file: ir.file().to_string(),
+            message,
+        };
+        let mut flags = settings::builder();
+        let allocator = if single_pass {
+            "single_pass"
+        } else {
+            "backtracking"
+        };
+        // No verifier: the routines come from a validated IR through the code below and the
+        // tests compare their results with the interpreter's bit for bit (it took a third of
+        // the compile time).
+        for (name, value) in [
+            ("opt_level", "speed"),
+            ("is_pic", "false"),
+            ("regalloc_algorithm", allocator),
+            ("enable_verifier", "false"),
+        ] {
+            flags
+                .set(name, value)
+                .map_err(|e| host(format!("setting {name}={value}: {e}")))?;
+        }
+        let isa = cranelift_native::builder()
+            .map_err(|e| host(e.to_string()))?
+            .finish(settings::Flags::new(flags))
+            .map_err(|e| host(e.to_string()))?;
+        let mut jit = JITBuilder::with_isa(isa, default_libcall_names());
+        jit.symbol("twv_unary", twv_unary as *const u8);
+        jit.symbol("twv_binary", twv_binary as *const u8);
+        let mut module = JITModule::new(jit);
+        let helper = |module: &mut JITModule, name: &str, operands: usize| {
+            let mut sig = module.make_signature();
+            sig.params.push(AbiParam::new(types::I32));
+            sig.params
+                .extend(std::iter::repeat_n(AbiParam::new(types::F64), operands));
+            sig.returns.push(AbiParam::new(types::F64));
+            module
+                .declare_function(name, Linkage::Import, &sig)
+                .map_err(|e| host(format!("{name}: {e}")))
+        };
+        let unary = helper(&mut module, "twv_unary", 1)?;
+        let binary = helper(&mut module, "twv_binary", 2)?;
+        Ok(Self {
+            ir,
+            ctx: module.make_context(),
+            module,
+            builder_ctx: FunctionBuilderContext::new(),
+            unary,
+            binary,
+            defined: 0,
+        })
+    }
+
+    fn signature(&self, shape: Shape<'_>) -> Signature {
+        let pointer = AbiParam::new(self.module.target_config().pointer_type());
+        let mut sig = self.module.make_signature();
+        match shape {
+            Shape::Work => sig.params.extend([pointer; 4]),
+            Shape::Dense(_) => {
+                sig.params.extend([pointer; 4]);
+                sig.params.push(AbiParam::new(types::I64));
+            }
+            Shape::FJw { .. } => {
+                // (x, u, p, w, k, f, out) → trace
+                sig.params.extend([pointer; 4]);
+                sig.params.push(AbiParam::new(types::I64));
+                sig.params.extend([pointer; 2]);
+                sig.returns.push(AbiParam::new(types::F64));
+            }
+        }
+        sig
+    }
+
+    /// Defines the routine of `function` in `shape`; its address once finalised.
+    fn define(
+        &mut self,
+        name: &str,
+        function: &Function,
+        shape: Shape<'_>,
+    ) -> Result<FuncId, JitError> {
+        let codegen = |message: String| JitError::Codegen {
+            file: self.ir.file().to_string(),
+            function: name.to_string(),
+            message,
+        };
+        // Offsets into the slices are 32-bit immediates.
+        if function.n_values() > i32::MAX as usize / 8 {
+            return Err(codegen(format!("{} values", function.n_values())));
+        }
+        let signature = self.signature(shape);
+        self.ctx.func.signature = signature.clone();
+        self.ctx.func.name = UserFuncName::user(0, self.defined as u32);
+        {
+            let mut b = FunctionBuilder::new(&mut self.ctx.func, &mut self.builder_ctx);
+            let block = b.create_block();
+            b.append_block_params_for_function_params(block);
+            b.switch_to_block(block);
+            b.seal_block(block);
+            let params = b.block_params(block).to_vec();
+            let helpers = emit::Helpers {
+                unary: self.module.declare_func_in_func(self.unary, b.func),
+                binary: self.module.declare_func_in_func(self.binary, b.func),
+            };
+            let args = [params[0], params[1], params[2]];
+            let n = function.n_values();
+            match shape {
+                Shape::Work => {
+                    let sinks = emit::work_sinks(function, params[3]);
+                    emit::values(&mut b, &helpers, function, args, &sinks);
+                    b.ins().return_(&[]);
+                }
+                Shape::Dense(output) => {
+                    let mut sinks = vec![Vec::new(); n];
+                    let rows = emit::row_pointers(&mut b, params[3], params[4], output.rows);
+                    emit::dense_sinks(&mut b, &mut sinks, output, &rows);
+                    emit::values(&mut b, &helpers, function, args, &sinks);
+                    b.ins().return_(&[]);
+                }
+                Shape::FJw { f, jac, columns } => {
+                    let [w, count, f_out, out] = [3, 4, 5, 6].map(|i| params[i]);
+                    // The Jacobian's stored entries go to a stack array (entry e at e), ẋ to
+                    // its output.
+                    let size = (8 * jac.values.len()) as u32;
+                    let slot = StackSlotData::new(StackSlotKind::ExplicitSlot, size, 3);
+                    let slot = b.create_sized_stack_slot(slot);
+                    let pointer = self.module.target_config().pointer_type();
+                    let entries = b.ins().stack_addr(pointer, slot, 0);
+                    let mut sinks = vec![Vec::new(); n];
+                    for (e, &v) in jac.values.iter().enumerate() {
+                        sinks[v].push((entries, (8 * e) as i32));
+                    }
+                    let one = b.ins().iconst(types::I64, 1);
+                    let rows = emit::row_pointers(&mut b, f_out, one, f.rows);
+                    emit::dense_sinks(&mut b, &mut sinks, f, &rows);
+                    emit::values(&mut b, &helpers, function, args, &sinks);
+                    let trace = emit::trace(&mut b, entries, jac);
+                    emit::jw_loop(&mut b, entries, columns, self.ir.nx(), (w, count, out));
+                    b.ins().return_(&[trace]);
+                }
+            }
+            b.finalize(self.module.target_config());
+        }
+        let id = self
+            .module
+            .declare_function(&format!("twv_{}", self.defined), Linkage::Local, &signature)
+            .map_err(|e| codegen(e.to_string()))?;
+        self.module
+            .define_function(id, &mut self.ctx)
+            .map_err(|e| codegen(format!("{e:?}")))?;
+        self.module.clear_context(&mut self.ctx);
+        self.defined += 1;
+        Ok(id)
+    }
+
+    /// Makes the routines executable; the module, to be kept as long as they are used.
+    fn finish(mut self) -> Result<JITModule, JitError> {
+        self.module
+            .finalize_definitions()
+            .map_err(|e| JitError::Codegen {
+                file: self.ir.file().to_string(),
+                function: "(all)".into(),
+                message: e.to_string(),
+            })?;
+        Ok(self.module)
+    }
+}
+
+impl JitCode {
+    /// The native code of `ir`, compiled as it is used. Fails at once if the code generator
+    /// does not support this CPU.
+    pub fn new(ir: &Ir) -> Result<Self, JitError> {
+        Builder::new(ir, false)?;
+        Ok(JitCode {
+            ir: ir.clone(),
+            functions: ir
+                .functions()
+                .iter()
+                .map(|(name, function)| (name.clone(), function.n_values(), OnceLock::new()))
+                .collect(),
+            dense: ir.functions().keys().map(|_| OnceLock::new()).collect(),
+            shapes: ir
+                .functions()
+                .iter()
+                .map(|(name, function)| function.output(name).map(|o| (o.rows, o.cols)))
+                .collect(),
+            hot: ["f", "jac_x", "jac_u"].map(|name| ir.functions().keys().position(|n| n == name)),
+            f_jw: OnceLock::new(),
+        })
+    }
+
+    /// Compiles function `name` in `shape` into a module of its own; `convert` turns its
+    /// address into the routine's type.
+    fn compile<E>(
+        &self,
+        name: &str,
+        shape: Shape<'_>,
+        convert: unsafe fn(*const u8) -> E,
+    ) -> Option<Compiled<E>> {
+        let function = self.ir.function(name)?;
+        let mut builder = Builder::new(&self.ir, function.n_values() > SINGLE_PASS_ABOVE).ok()?;
+        let id = builder.define(name, function, shape).ok()?;
+        let module = builder.finish().ok()?;
+        // SAFETY: the address is the routine just defined with the signature of `E`, the
+        // platform's C calling convention (`make_signature`'s default); `convert` only casts.
+        let entry = unsafe { convert(module.get_finalized_function(id)) };
+        Some(Compiled {
+            routine: Routine {
+                entry,
+                reads: reads(function),
+            },
+            module: ManuallyDrop::new(module),
+        })
+    }
+
+    /// The index of function `name`: the hot three without comparing strings of unknown length.
+    fn index(&self, name: &str) -> Option<usize> {
+        match name {
+            "f" => self.hot[0],
+            "jac_x" => self.hot[1],
+            "jac_u" => self.hot[2],
+            _ => self.functions.iter().position(|(n, ..)| n == name),
+        }
+    }
+
+    /// Whether output `o` of the IR is a column of ẋ's length.
+    fn is_state_column(&self, o: &twv_ir::Output) -> bool {
+        (o.rows, o.cols) == (self.ir.nx(), 1)
+    }
+
+    fn work_routine(&self, index: usize) -> Option<&Routine<Entry>> {
+        let (name, _, lazy) = &self.functions[index];
+        let compiled = lazy.get_or_init(|| self.compile(name, Shape::Work, as_entry));
+        compiled.as_ref().map(|c| &c.routine)
+    }
+
+    fn dense_routine(&self, index: usize) -> Option<&Routine<Dense>> {
+        let compiled = self.dense[index].get_or_init(|| {
+            let name = &self.functions[index].0;
+            let output = self.ir.output(name, name)?;
+            self.compile(name, Shape::Dense(output), as_dense)
+        });
+        compiled.as_ref().map(|c| &c.routine)
+    }
+
+    fn f_jw_routine(&self) -> Option<&Routine<FJw>> {
+        let compiled = self.f_jw.get_or_init(|| {
+            let f = self
+                .ir
+                .output("f_jac_x", "f")
+                .filter(|f| self.is_state_column(f))?;
+            let jac = self.ir.output("f_jac_x", "jac_x")?;
+            let columns = jac.stored_columns();
+            let shape = Shape::FJw {
+                f,
+                jac,
+                columns: &columns,
+            };
+            self.compile("f_jac_x", shape, as_f_jw)
+        });
+        compiled.as_ref().map(|c| &c.routine)
+    }
+}
+
+/// # Safety
+/// `address` must be a routine with the signature of [`Entry`].
+unsafe fn as_entry(address: *const u8) -> Entry {
+    // SAFETY: the caller's.
+    unsafe { std::mem::transmute::<*const u8, Entry>(address) }
+}
+
+/// # Safety
+/// `address` must be a routine with the signature of [`Dense`].
+unsafe fn as_dense(address: *const u8) -> Dense {
+    // SAFETY: the caller's.
+    unsafe { std::mem::transmute::<*const u8, Dense>(address) }
+}
+
+/// # Safety
+/// `address` must be a routine with the signature of [`FJw`].
+unsafe fn as_f_jw(address: *const u8) -> FJw {
+    // SAFETY: the caller's.
+    unsafe { std::mem::transmute::<*const u8, FJw>(address) }
+}
+
+impl NativeCode for JitCode {
+    fn ir_hash(&self) -> &str {
+        self.ir.hash()
+    }
+
+    fn eval(&self, function: &str, x: &[f64], u: &[f64], p: &[f64], work: &mut [f64]) -> bool {
+        let Some(index) = self.index(function) else {
+            return false;
+        };
+        let Some(routine) = self.work_routine(index) else {
+            return false;
+        };
+        if !routine.reads_within(x, u, p) || work.len() < self.functions[index].1 {
+            return false;
+        }
+        // SAFETY: the routine reads x, u, p within `reads` and writes work[..n_values] (the
+        // offsets it was compiled with), all within the slices, checked just above.
+        unsafe { (routine.entry)(x.as_ptr(), u.as_ptr(), p.as_ptr(), work.as_mut_ptr()) };
+        true
+    }
+
+    fn dense(
+        &self,
+        function: &str,
+        (x, u, p): (&[f64], &[f64], &[f64]),
+        (rows, cols, stride): (usize, usize, usize),
+        out: &mut [f64],
+    ) -> bool {
+        let Some(index) = self.index(function) else {
+            return false;
+        };
+        let fits = self.shapes[index] == Some((rows, cols))
+            && cols <= stride
+            && out.len() == rows * stride;
+        let Some(routine) = self.dense_routine(index).filter(|_| fits) else {
+            return false;
+        };
+        if !routine.reads_within(x, u, p) {
+            return false;
+        }
+        // SAFETY: reads within the checked extents; writes out[r·stride + c] for r < rows and
+        // c < cols ≤ stride, within `out` (rows·stride long).
+        unsafe { (routine.entry)(x.as_ptr(), u.as_ptr(), p.as_ptr(), out.as_mut_ptr(), stride) };
+        true
+    }
+
+    fn f_jw(
+        &self,
+        (x, u, p): (&[f64], &[f64], &[f64]),
+        (w, count): (&[f64], usize),
+        f: &mut [f64],
+        out: &mut [f64],
+    ) -> Option<f64> {
+        let routine = self.f_jw_routine()?;
+        let nx = self.ir.nx();
+        let fits = w.len() == count * nx && out.len() == w.len() && f.len() >= nx;
+        if !routine.reads_within(x, u, p) || !fits {
+            return None;
+        }
+        // SAFETY: reads x, u, p within the checked extents and w[..count·nx]; writes f[..nx]
+        // and out[..count·nx], all within the slices.
+        let trace = unsafe {
+            (routine.entry)(
+                x.as_ptr(),
+                u.as_ptr(),
+                p.as_ptr(),
+                w.as_ptr(),
+                count,
+                f.as_mut_ptr(),
+                out.as_mut_ptr(),
+            )
+        };
+        Some(trace)
+    }
+}
