@@ -59,15 +59,19 @@ step "cargo build of every target with clippy's lints (-D warnings)"
 TWV_CLIPPY_DRIVER="$(rustup which clippy-driver 2>/dev/null || command -v clippy-driver)"
 export TWV_CLIPPY_DRIVER
 export RUSTC_WORKSPACE_WRAPPER="$PWD/.ci/clippy-rustc"
-cargo test --workspace --no-run --profile dev
-cargo build --workspace --benches --profile dev
+# The `twv` of the tests has the JIT (`--runtime jit`, a cargo feature the release build leaves
+# out: see analysis/cli/Cargo.toml); every cargo command below names it, so none rebuilds.
+features=(--features twv-cli/jit)
+cargo test --workspace --no-run --profile dev "${features[@]}"
+cargo build --workspace --benches --profile dev "${features[@]}"
 
 # trybuild's compile-fail case builds the proc-macro's dependencies in a target folder of its
 # own (~50 s of one core): it runs in the background beside the doc tests and the Python
 # package, where a core is idle, instead of inside nextest. Both runs name what they ran.
 step "cargo nextest (every test binary, in parallel; the compile-fail case in the background)"
 compile_fail='test(=macro_errors_are_compile_errors)'
-cargo nextest run --workspace --cargo-profile dev --no-fail-fast -E "not $compile_fail"
+cargo nextest run --workspace --cargo-profile dev "${features[@]}" --no-fail-fast \
+    -E "not $compile_fail"
 ( cargo nextest run -p twv-macros --cargo-profile dev -E "$compile_fail" \
     >target/compile-fail-test.log 2>&1 ) &
 compile_fail_pid=$!
@@ -88,7 +92,7 @@ step "twv serve in a real browser: headless Chromium through WebDriver (in the b
 browser_pid=$!
 
 step "cargo test --doc"
-cargo test --workspace --doc --profile dev
+cargo test --workspace --doc --profile dev "${features[@]}"
 
 step "python package: build the extension into .venv (maturin), pytest python/tests"
 # --uv: the .venv's pinned uv installs the extension (pip resolving its dependencies took ~20 s).

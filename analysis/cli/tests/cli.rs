@@ -72,8 +72,29 @@ fn interpreter_and_generated_code_agree_through_the_cli() {
     assert_eq!(a.stdout, b.stdout, "bit-identical JSON");
 }
 
+/// A `twv` built without the `jit` feature says so for `--runtime jit` and names the way out.
+#[cfg(not(feature = "jit"))]
+#[test]
+fn without_the_jit_feature_runtime_jit_names_the_feature() {
+    let ir = repo().join("generated/ir/lorenz.json");
+    let out = twv(&[
+        "eval",
+        "--ir",
+        ir.to_str().unwrap(),
+        "--x",
+        "1,2,3",
+        "--runtime",
+        "jit",
+    ]);
+    fails_with(
+        &out,
+        &["without the JIT", "--features jit", "--runtime interpreter"],
+    );
+}
+
 /// `--runtime`: an IR file's closed-loop spectrum (Dopri5, a saturated PID) compiled by the
 /// JIT writes the same bytes as the interpreter's, and the spectrum of the shipped model.
+#[cfg(feature = "jit")]
 #[test]
 fn the_jit_and_the_interpreter_write_the_same_files() {
     let dir = scratch("runtime");
