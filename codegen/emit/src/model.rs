@@ -448,10 +448,12 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
     })
 }
 
-/// One kernel built twice behind one entry point `name`: `name_baseline` for the target's
-/// baseline instruction set, `name_avx512` for AVX-512F+VL (32 registers, 8-wide J·W columns),
-/// chosen at run time by `twv_kernels::isa::avx512()`. Both call the same `#[inline(always)]` body,
-/// so both perform the same IEEE operations in the same order: same bits, different speed.
+/// One kernel built three times behind one entry point `name`: `name_baseline` for the
+/// target's baseline instruction set, `name_avx2` for AVX2 (16 registers, 4-wide J·W columns,
+/// three-operand VEX encoding) and `name_avx512` for AVX-512F+VL (32 registers, 8-wide
+/// columns), chosen at run time by `twv_kernels::isa`. All call the same `#[inline(always)]`
+/// body, so all perform the same IEEE operations in the same order (FMA is not enabled, and
+/// Rust never fuses on its own): same bits, different speed.
 fn multiversion(
     name: &str,
     doc: &str,
@@ -462,11 +464,12 @@ fn multiversion(
 ) -> TokenStream {
     let entry = format_ident!("{name}");
     let baseline = format_ident!("{name}_baseline");
+    let avx2 = format_ident!("{name}_avx2");
     let avx512 = format_ident!("{name}_avx512");
     let inlined = format_ident!("{name}_body");
     let baseline_doc = format!(
         "[`Self::{name}`] built for the target's baseline instruction set: what runs where \
-         AVX-512 is missing (public so tests can compare the two builds bit for bit)."
+         AVX2 is missing (public so tests can compare the builds bit for bit)."
     );
     quote! {
         #[doc = #doc]
@@ -476,10 +479,18 @@ fn multiversion(
                 // AVX-512VL, the features this build was compiled for.
                 return unsafe { self.#avx512(#args) };
             }
+            if ::twv_kernels::isa::avx2() {
+                // SAFETY: `avx2()` is true only when the CPU and the OS support AVX2.
+                return unsafe { self.#avx2(#args) };
+            }
             self.#baseline(#args)
         }
         #[doc = #baseline_doc]
         pub fn #baseline(&self, #params) #ret {
+            self.#inlined(#args)
+        }
+        #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
+        unsafe fn #avx2(&self, #params) #ret {
             self.#inlined(#args)
         }
         #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx512f,avx512vl"))]

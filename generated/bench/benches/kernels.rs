@@ -176,27 +176,40 @@ fn main() -> ExitCode {
         &runtime,
     );
 
-    // The same kernels with their AVX-512 build switched off: what a CPU without AVX-512 gets
-    // (and how much of the ratio is the run-time choice of instruction set).
-    if twv_kernels::isa::avx512() {
-        twv_kernels::isa::force_baseline(true);
+    // The same kernels with the better builds switched off: what a CPU with only AVX2, or only
+    // the x86-64 baseline, gets (and how much of the ratio is the run-time choice of ISA).
+    use twv_kernels::isa::{best, force, Isa};
+    let top = best();
+    for lower in [Isa::Avx2, Isa::Baseline] {
+        if lower >= top {
+            continue;
+        }
+        force(lower);
         println!();
-        println!("the same, runtime parameters, AVX-512 build switched off (x86-64 baseline):");
+        println!(
+            "the same, runtime parameters, kernels limited to the {} build:",
+            lower.name()
+        );
         println!();
-        println!("| function | twv ns | CasADi C ns | ratio (twv/C) |");
-        println!("|---|---:|---:|---:|");
+        println!(
+            "| function | twv ns | CasADi C ns | ratio (twv/C) | hand C ns | ratio (twv/hand C) |"
+        );
+        println!("|---|---:|---:|---:|---:|---:|");
         for function in ["f", "f+jac_x", "f_jw (K=8)"] {
             let pair = measure(plan, function, &runtime, &c_runtime, &pt);
+            let hand = measure(plan, function, &runtime, &h_runtime, &pt);
             println!(
-                "| {function} | {} | {} | {:.2} |",
-                pair.twv, pair.c, pair.ratio.median
+                "| {function} | {} | {} | {:.2} | {} | {:.2} |",
+                pair.twv, pair.c, pair.ratio.median, hand.c, hand.ratio.median
             );
         }
-        twv_kernels::isa::force_baseline(false);
-    } else {
-        println!();
-        println!("(this CPU has no AVX-512F/VL: the table above is the x86-64 baseline build)");
+        force(top);
     }
+    println!();
+    println!(
+        "(this CPU's best build: {}; builds above it could not run here)",
+        top.name()
+    );
 
     // What each side pays per angle: CasADi's C calls the C library's sin and cos (gcc merges
     // them into one sincos call); the Rust kernels inline twv_kernels::trig::sin_cos.
@@ -248,7 +261,6 @@ fn main() -> ExitCode {
         "closed-loop stage kernel (f, J·w for one w, ∂f/∂u): one point per call {one} ns; \
          {L} lanes per call, each build this CPU can run:"
     );
-    use twv_kernels::isa::{best, force, Isa};
     for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
         if best() < isa {
             println!("  {}: not run (this CPU lacks it)", isa.name());
