@@ -116,65 +116,73 @@ macro_rules! lanes_agree_with_one_point {
     }};
 }
 
+/// `$check!(model, NX, NU, name)` for every shipped model, runtime and baked; `$what` names a
+/// model for the messages.
+macro_rules! every_shipped_model {
+    ($check:ident, $what:expr) => {{
+        $check!(Vehicle8::with_defaults(), 8, 2, $what("vehicle8"));
+        $check!(baked::Vehicle8, 8, 2, $what("baked vehicle8"));
+        $check!(Vehicle7::with_defaults(), 7, 2, $what("vehicle7"));
+        $check!(baked::Vehicle7, 7, 2, $what("baked vehicle7"));
+        $check!(Segway7::with_defaults(), 7, 2, $what("segway7"));
+        $check!(baked::Segway7, 7, 2, $what("baked segway7"));
+        $check!(Lorenz::with_defaults(), 3, 0, $what("lorenz"));
+        $check!(baked::Lorenz, 3, 0, $what("baked lorenz"));
+        $check!(HenonHeiles::with_defaults(), 4, 0, $what("henon_heiles"));
+        $check!(baked::HenonHeiles, 4, 0, $what("baked henon_heiles"));
+    }};
+}
+
 /// The lanes kernel of every shipped model, runtime and baked, in each build this CPU can run
 /// (AVX-512, AVX2, one point at a time), has the one-point kernel's bits in every lane; the
 /// builds it cannot run are named as not run.
 #[test]
 fn lanes_builds_have_the_one_point_bits_on_every_isa_here() {
-    use twv_kernels::isa::{best, force, Isa};
-    for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
-        if best() < isa {
-            eprintln!(
-                "SKIPPED: the {} lanes build did not run: this CPU lacks {}",
-                isa.name(),
-                isa.name()
-            );
-            continue;
-        }
-        assert_eq!(force(isa), isa);
-        let what = |m: &str| format!("{m} ({})", isa.name());
-        lanes_agree_with_one_point!(Vehicle8::with_defaults(), 8, 2, what("vehicle8"));
-        lanes_agree_with_one_point!(baked::Vehicle8, 8, 2, what("baked vehicle8"));
-        lanes_agree_with_one_point!(Vehicle7::with_defaults(), 7, 2, what("vehicle7"));
-        lanes_agree_with_one_point!(baked::Vehicle7, 7, 2, what("baked vehicle7"));
-        lanes_agree_with_one_point!(Segway7::with_defaults(), 7, 2, what("segway7"));
-        lanes_agree_with_one_point!(baked::Segway7, 7, 2, what("baked segway7"));
-        lanes_agree_with_one_point!(Lorenz::with_defaults(), 3, 0, what("lorenz"));
-        lanes_agree_with_one_point!(baked::Lorenz, 3, 0, what("baked lorenz"));
-        lanes_agree_with_one_point!(HenonHeiles::with_defaults(), 4, 0, what("henon_heiles"));
-        lanes_agree_with_one_point!(baked::HenonHeiles, 4, 0, what("baked henon_heiles"));
-    }
-    force(Isa::Avx512);
+    use twv_kernels::isa::Isa;
+    on_each_build(
+        &[Isa::Avx512, Isa::Avx2, Isa::Baseline],
+        "lanes build",
+        |isa| {
+            let what = |m: &str| format!("{m} ({})", isa.name());
+            every_shipped_model!(lanes_agree_with_one_point, what);
+        },
+    );
 }
 
 #[test]
 fn every_build_agrees_with_the_baseline_bit_for_bit() {
-    use twv_kernels::isa::{best, force, Isa};
+    use twv_kernels::isa::Isa;
     isa_detection_matches_std_and_can_be_forced();
-    for isa in [Isa::Avx512, Isa::Avx2] {
+    // (The baseline build is what the others are compared with.)
+    on_each_build(
+        &[Isa::Avx512, Isa::Avx2],
+        "build vs baseline comparison",
+        |isa| {
+            let what = |m: &str| format!("{m} ({})", isa.name());
+            every_shipped_model!(both_builds_agree, what);
+        },
+    );
+}
+
+/// Runs `check` with each of `isas` in force that this CPU has, and says which did not run
+/// (their builds would silently fall back to a lower one: running them would prove nothing).
+fn on_each_build(
+    isas: &[twv_kernels::isa::Isa],
+    what: &str,
+    check: impl Fn(twv_kernels::isa::Isa),
+) {
+    use twv_kernels::isa::{best, force, Isa};
+    for &isa in isas {
         if best() < isa {
-            // The dispatching call would run a lower build: comparing it with the baseline
-            // would not test this one, so the comparison is not run, and the log says so.
             eprintln!(
-                "SKIPPED: the {} vs baseline comparison did not run: this CPU lacks {} (the \
-                 ISA detection above did run)",
+                "SKIPPED: the {} {what} did not run: this CPU lacks {}",
                 isa.name(),
                 isa.name()
             );
             continue;
         }
         assert_eq!(force(isa), isa);
-        let what = |m: &str| format!("{m} ({})", isa.name());
-        both_builds_agree!(Vehicle8::with_defaults(), 8, 2, what("vehicle8"));
-        both_builds_agree!(baked::Vehicle8, 8, 2, what("baked vehicle8"));
-        both_builds_agree!(Vehicle7::with_defaults(), 7, 2, what("vehicle7"));
-        both_builds_agree!(baked::Vehicle7, 7, 2, what("baked vehicle7"));
-        both_builds_agree!(Segway7::with_defaults(), 7, 2, what("segway7"));
-        both_builds_agree!(baked::Segway7, 7, 2, what("baked segway7"));
-        both_builds_agree!(Lorenz::with_defaults(), 3, 0, what("lorenz"));
-        both_builds_agree!(baked::Lorenz, 3, 0, what("baked lorenz"));
-        both_builds_agree!(HenonHeiles::with_defaults(), 4, 0, what("henon_heiles"));
-        both_builds_agree!(baked::HenonHeiles, 4, 0, what("baked henon_heiles"));
+        check(isa);
     }
     force(Isa::Avx512);
 }
