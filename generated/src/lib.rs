@@ -36,6 +36,15 @@ pub fn ir_json(name: &str) -> Option<&'static str> {
         .map(|(_, text)| *text)
 }
 
+/// The IR text of any shipped model, with generated code or on the interpreter.
+pub fn shipped_ir_json(name: &str) -> Option<&'static str> {
+    MODELS
+        .iter()
+        .chain(&INTERPRETED)
+        .find(|(n, _)| *n == name)
+        .map(|(_, text)| *text)
+}
+
 /// What [`visit`] runs (the trait lives in twv-model so the IR interpreter's dispatch shares it).
 pub use twv_model::ModelVisitor as Visitor;
 

@@ -198,7 +198,8 @@ impl Output {
     }
 
     /// [`stored_columns`](Self::stored_columns) with each entry's value id instead of its CCS
-    /// index: what the J·W of the interpreter and the JIT multiply by.
+    /// index: what the interpreter's J·W multiplies by (the JIT's reads the entries by CCS index
+    /// from an array of its own).
     pub fn stored_column_values(&self) -> Vec<(usize, Vec<Option<usize>>)> {
         let mut columns = self.stored_columns();
         for (_, rows) in &mut columns {

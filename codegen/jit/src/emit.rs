@@ -1,8 +1,11 @@
-//! The Cranelift IR of the routines: an IR function's instructions as one straight-line block,
-//! and the three ways its values leave it (into the interpreter's work vector, as a dense ẋ,
-//! as ẋ with J·W and the trace).
+//! The Cranelift IR of the routines: an IR function's instructions as one straight-line block
+//! whose values are stored where they are needed (the interpreter's work vector, a dense
+//! output, an array of the Jacobian's entries) as soon as they exist; then the trace and the
+//! J·W loop, read back from that array.
 
-use cranelift_codegen::ir::{types, FuncRef, InstBuilder, MemFlagsData, Value};
+use cranelift_codegen::ir::{
+    types, FuncRef, InstBuilder, MemFlagsData, StackSlotData, StackSlotKind, Value,
+};
 use cranelift_frontend::FunctionBuilder;
 use twv_ir::{BinaryOp, Function, Instr, Output, UnaryOp};
 
@@ -17,7 +20,7 @@ pub struct Helpers {
 }
 
 /// The byte offset of entry `index` of an f64 slice (bounded by the size check of
-/// `JitCode::new`).
+/// `Builder::compile`).
 fn offset(index: usize) -> i32 {
     (index * 8) as i32
 }
@@ -55,9 +58,8 @@ pub fn values(
     }
 }
 
-/// Sinks that store every value an output of `function` reads at `work[id]`.
-pub fn work_sinks(function: &Function, work: Value) -> Sinks {
-    let mut sinks: Sinks = vec![Vec::new(); function.n_values()];
+/// Adds sinks that store every value an output of `function` reads at `work[id]`.
+pub fn work_sinks(sinks: &mut Sinks, function: &Function, work: Value) {
     for output in function.outputs() {
         for &id in &output.values {
             if sinks[id].is_empty() {
@@ -65,7 +67,23 @@ pub fn work_sinks(function: &Function, work: Value) -> Sinks {
             }
         }
     }
-    sinks
+}
+
+/// Adds sinks that store the stored entries of `jac` in order into an array on the routine's
+/// stack, and returns its address (`pointer`-typed).
+pub fn entry_sinks(
+    b: &mut FunctionBuilder<'_>,
+    sinks: &mut Sinks,
+    jac: &Output,
+    pointer: types::Type,
+) -> Value {
+    let size = (8 * jac.values.len()) as u32;
+    let slot = b.create_sized_stack_slot(StackSlotData::new(StackSlotKind::ExplicitSlot, size, 3));
+    let entries = b.ins().stack_addr(pointer, slot, 0);
+    for (e, &v) in jac.values.iter().enumerate() {
+        sinks[v].push((entries, offset(e)));
+    }
+    entries
 }
 
 /// The address of each of `rows` rows of a row-major matrix at `base` whose row stride (in

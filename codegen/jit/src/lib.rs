@@ -24,11 +24,8 @@ use std::fmt;
 use std::mem::ManuallyDrop;
 use std::sync::{Arc, OnceLock};
 
-use cranelift_codegen::ir::{
-    types, AbiParam, InstBuilder, Signature, StackSlotData, StackSlotKind, UserFuncName,
-};
+use cranelift_codegen::ir::{types, AbiParam, InstBuilder, Signature};
 use cranelift_codegen::settings::{self, Configurable};
-use cranelift_codegen::Context;
 use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{default_libcall_names, FuncId, Linkage, Module};
@@ -37,16 +34,10 @@ use twv_ir::{BinaryOp, Function, Instr, Ir, NativeCode, UnaryOp};
 /// Why an IR could not be compiled.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum JitError {
-    /// The code generator does not support this machine.
+    /// The code generator does not support this machine. (A routine that cannot be compiled
+    /// later, when first used, is left to the interpreter, which has the same bits.)
     #[error("{file}: the JIT does not support this CPU: {message}")]
     Host { file: String, message: String },
-    /// Code generation of one function failed.
-    #[error("{file}: function `{function}`: the JIT could not compile it: {message}")]
-    Codegen {
-        file: String,
-        function: String,
-        message: String,
-    },
 }
 
 /// The native code of `ir` (see the crate documentation); an error if the code generator does
@@ -116,6 +107,19 @@ unsafe impl<E> Sync for Compiled<E> {}
 /// not be compiled (the interpreter, with the same bits, then runs instead).
 type Lazy<E> = OnceLock<Option<Compiled<E>>>;
 
+/// One IR function's routines.
+struct FunctionCode {
+    name: String,
+    /// Its value count: the work vector its work routine writes into.
+    n_values: usize,
+    /// The (rows, cols) of its output of its own name (`f`, `jac_x`, `M`, …), if it has one.
+    shape: Option<(usize, usize)>,
+    /// Storing what its outputs read in the work vector.
+    work: Lazy<Entry>,
+    /// Writing its output of its own name densely.
+    dense: Lazy<Dense>,
+}
+
 /// The native code of one IR: [`NativeCode`] for [`twv_ir::Interpreted::with_native`].
 ///
 /// Each routine is compiled when it is first called, in a module of its own, so that a run
@@ -123,29 +127,19 @@ type Lazy<E> = OnceLock<Option<Compiled<E>>>;
 /// its 80 000).
 pub struct JitCode {
     ir: Ir,
-    /// Every function, by name, with its value count (the work vector it writes into).
-    functions: Vec<(String, usize, Lazy<Entry>)>,
-    /// The (rows, cols) of each function's output of its own name, if it has one.
-    shapes: Vec<Option<(usize, usize)>>,
+    functions: Vec<FunctionCode>,
     /// The indices of `f`, `jac_x` and `jac_u`, looked up at every step.
     hot: [Option<usize>; 3],
-    /// Every function's output of its own name (`f`, `jac_x`, `M`, …) written densely.
-    dense: Vec<Lazy<Dense>>,
     /// `f_jac_x` as ẋ, J·W and the trace.
     f_jw: Lazy<FJw>,
 }
 
 impl fmt::Debug for JitCode {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let compiled: Vec<&str> = self
-            .functions
-            .iter()
-            .filter(|(.., lazy)| lazy.get().is_some_and(Option::is_some))
-            .map(|(n, ..)| n.as_str())
-            .collect();
+        let names: Vec<&str> = self.functions.iter().map(|c| c.name.as_str()).collect();
         f.debug_struct("JitCode")
             .field("ir_hash", &self.ir.hash())
-            .field("compiled", &compiled)
+            .field("functions", &names)
             .finish()
     }
 }
@@ -190,19 +184,15 @@ enum Shape<'a> {
     },
 }
 
-/// One module (one register allocator) and the routines defined in it.
-struct Builder<'a> {
-    ir: &'a Ir,
+/// One module (one register allocator) for one routine.
+struct Builder {
     module: JITModule,
-    ctx: Context,
-    builder_ctx: FunctionBuilderContext,
     unary: FuncId,
     binary: FuncId,
-    defined: usize,
 }
 
-impl<'a> Builder<'a> {
-    fn new(ir: &'a Ir, single_pass: bool) -> Result<Self, JitError> {
+impl Builder {
+    fn new(ir: &Ir, single_pass: bool) -> Result<Self, JitError> {
         let host = |message: String| JitError::Host {
             file: ir.file().to_string(),
             message,
@@ -247,13 +237,9 @@ impl<'a> Builder<'a> {
         let unary = helper(&mut module, "twv_unary", 1)?;
         let binary = helper(&mut module, "twv_binary", 2)?;
         Ok(Self {
-            ir,
-            ctx: module.make_context(),
             module,
-            builder_ctx: FunctionBuilderContext::new(),
             unary,
             binary,
-            defined: 0,
         })
     }
 
@@ -277,97 +263,67 @@ impl<'a> Builder<'a> {
         sig
     }
 
-    /// Defines the routine of `function` in `shape`; its address once finalised.
-    fn define(
-        &mut self,
-        name: &str,
+    /// Compiles `function` (of `nx` states) in `shape`: the module, to be kept as long as the
+    /// routine is used, and the routine's id in it. `None` if Cranelift refuses it.
+    fn compile(
+        mut self,
         function: &Function,
         shape: Shape<'_>,
-    ) -> Result<FuncId, JitError> {
-        let codegen = |message: String| JitError::Codegen {
-            file: self.ir.file().to_string(),
-            function: name.to_string(),
-            message,
-        };
+        nx: usize,
+    ) -> Option<(JITModule, FuncId)> {
         // Offsets into the slices are 32-bit immediates.
         if function.n_values() > i32::MAX as usize / 8 {
-            return Err(codegen(format!("{} values", function.n_values())));
+            return None;
         }
-        let signature = self.signature(shape);
-        self.ctx.func.signature = signature.clone();
-        self.ctx.func.name = UserFuncName::user(0, self.defined as u32);
-        {
-            let mut b = FunctionBuilder::new(&mut self.ctx.func, &mut self.builder_ctx);
-            let block = b.create_block();
-            b.append_block_params_for_function_params(block);
-            b.switch_to_block(block);
-            b.seal_block(block);
-            let params = b.block_params(block).to_vec();
-            let helpers = emit::Helpers {
-                unary: self.module.declare_func_in_func(self.unary, b.func),
-                binary: self.module.declare_func_in_func(self.binary, b.func),
-            };
-            let args = [params[0], params[1], params[2]];
-            let n = function.n_values();
-            match shape {
-                Shape::Work => {
-                    let sinks = emit::work_sinks(function, params[3]);
-                    emit::values(&mut b, &helpers, function, args, &sinks);
-                    b.ins().return_(&[]);
-                }
-                Shape::Dense(output) => {
-                    let mut sinks = vec![Vec::new(); n];
-                    let rows = emit::row_pointers(&mut b, params[3], params[4], output.rows);
-                    emit::dense_sinks(&mut b, &mut sinks, output, &rows);
-                    emit::values(&mut b, &helpers, function, args, &sinks);
-                    b.ins().return_(&[]);
-                }
-                Shape::FJw { f, jac, columns } => {
-                    let [w, count, f_out, out] = [3, 4, 5, 6].map(|i| params[i]);
-                    // The Jacobian's stored entries go to a stack array (entry e at e), ẋ to
-                    // its output.
-                    let size = (8 * jac.values.len()) as u32;
-                    let slot = StackSlotData::new(StackSlotKind::ExplicitSlot, size, 3);
-                    let slot = b.create_sized_stack_slot(slot);
-                    let pointer = self.module.target_config().pointer_type();
-                    let entries = b.ins().stack_addr(pointer, slot, 0);
-                    let mut sinks = vec![Vec::new(); n];
-                    for (e, &v) in jac.values.iter().enumerate() {
-                        sinks[v].push((entries, (8 * e) as i32));
-                    }
-                    let one = b.ins().iconst(types::I64, 1);
-                    let rows = emit::row_pointers(&mut b, f_out, one, f.rows);
-                    emit::dense_sinks(&mut b, &mut sinks, f, &rows);
-                    emit::values(&mut b, &helpers, function, args, &sinks);
-                    let trace = emit::trace(&mut b, entries, jac);
-                    emit::jw_loop(&mut b, entries, columns, self.ir.nx(), (w, count, out));
-                    b.ins().return_(&[trace]);
-                }
+        let mut ctx = self.module.make_context();
+        ctx.func.signature = self.signature(shape);
+        let mut builder_ctx = FunctionBuilderContext::new();
+        let mut b = FunctionBuilder::new(&mut ctx.func, &mut builder_ctx);
+        let block = b.create_block();
+        b.append_block_params_for_function_params(block);
+        b.switch_to_block(block);
+        b.seal_block(block);
+        let params = b.block_params(block).to_vec();
+        let helpers = emit::Helpers {
+            unary: self.module.declare_func_in_func(self.unary, b.func),
+            binary: self.module.declare_func_in_func(self.binary, b.func),
+        };
+        let args = [params[0], params[1], params[2]];
+        let mut sinks: emit::Sinks = vec![Vec::new(); function.n_values()];
+        match shape {
+            Shape::Work => {
+                emit::work_sinks(&mut sinks, function, params[3]);
+                emit::values(&mut b, &helpers, function, args, &sinks);
+                b.ins().return_(&[]);
             }
-            b.finalize(self.module.target_config());
+            Shape::Dense(output) => {
+                let rows = emit::row_pointers(&mut b, params[3], params[4], output.rows);
+                emit::dense_sinks(&mut b, &mut sinks, output, &rows);
+                emit::values(&mut b, &helpers, function, args, &sinks);
+                b.ins().return_(&[]);
+            }
+            Shape::FJw { f, jac, columns } => {
+                let [w, count, f_out, out] = [3, 4, 5, 6].map(|i| params[i]);
+                // The Jacobian's stored entries go to a stack array, ẋ to its output.
+                let pointer = self.module.target_config().pointer_type();
+                let entries = emit::entry_sinks(&mut b, &mut sinks, jac, pointer);
+                let one = b.ins().iconst(types::I64, 1);
+                let rows = emit::row_pointers(&mut b, f_out, one, f.rows);
+                emit::dense_sinks(&mut b, &mut sinks, f, &rows);
+                emit::values(&mut b, &helpers, function, args, &sinks);
+                let trace = emit::trace(&mut b, entries, jac);
+                emit::jw_loop(&mut b, entries, columns, nx, (w, count, out));
+                b.ins().return_(&[trace]);
+            }
         }
+        b.finalize(self.module.target_config());
         let id = self
             .module
-            .declare_function(&format!("twv_{}", self.defined), Linkage::Local, &signature)
-            .map_err(|e| codegen(e.to_string()))?;
-        self.module
-            .define_function(id, &mut self.ctx)
-            .map_err(|e| codegen(format!("{e:?}")))?;
-        self.module.clear_context(&mut self.ctx);
-        self.defined += 1;
-        Ok(id)
-    }
-
-    /// Makes the routines executable; the module, to be kept as long as they are used.
-    fn finish(mut self) -> Result<JITModule, JitError> {
-        self.module
-            .finalize_definitions()
-            .map_err(|e| JitError::Codegen {
-                file: self.ir.file().to_string(),
-                function: "(all)".into(),
-                message: e.to_string(),
-            })?;
-        Ok(self.module)
+            .declare_function("twv_routine", Linkage::Local, &ctx.func.signature)
+            .ok()?;
+        self.module.define_function(id, &mut ctx).ok()?;
+        self.module.finalize_definitions().ok()?;
+        Some((self.module, id))
     }
 }
 
@@ -381,13 +337,13 @@ impl JitCode {
             functions: ir
                 .functions()
                 .iter()
-                .map(|(name, function)| (name.clone(), function.n_values(), OnceLock::new()))
-                .collect(),
-            dense: ir.functions().keys().map(|_| OnceLock::new()).collect(),
-            shapes: ir
-                .functions()
-                .iter()
-                .map(|(name, function)| function.output(name).map(|o| (o.rows, o.cols)))
+                .map(|(name, function)| FunctionCode {
+                    name: name.clone(),
+                    n_values: function.n_values(),
+                    shape: function.output(name).map(|o| (o.rows, o.cols)),
+                    work: OnceLock::new(),
+                    dense: OnceLock::new(),
+                })
                 .collect(),
             hot: ["f", "jac_x", "jac_u"].map(|name| ir.functions().keys().position(|n| n == name)),
             f_jw: OnceLock::new(),
@@ -403,9 +359,8 @@ impl JitCode {
         convert: unsafe fn(*const u8) -> E,
     ) -> Option<Compiled<E>> {
         let function = self.ir.function(name)?;
-        let mut builder = Builder::new(&self.ir, function.n_values() > SINGLE_PASS_ABOVE).ok()?;
-        let id = builder.define(name, function, shape).ok()?;
-        let module = builder.finish().ok()?;
+        let builder = Builder::new(&self.ir, function.n_values() > SINGLE_PASS_ABOVE).ok()?;
+        let (module, id) = builder.compile(function, shape, self.ir.nx())?;
         // SAFETY: the address is the routine just defined with the signature of `E`, the
         // platform's C calling convention (`make_signature`'s default); `convert` only casts.
         let entry = unsafe { convert(module.get_finalized_function(id)) };
@@ -424,7 +379,7 @@ impl JitCode {
             "f" => self.hot[0],
             "jac_x" => self.hot[1],
             "jac_u" => self.hot[2],
-            _ => self.functions.iter().position(|(n, ..)| n == name),
+            _ => self.functions.iter().position(|c| c.name == name),
         }
     }
 
@@ -433,17 +388,17 @@ impl JitCode {
         (o.rows, o.cols) == (self.ir.nx(), 1)
     }
 
-    fn work_routine(&self, index: usize) -> Option<&Routine<Entry>> {
-        let (name, _, lazy) = &self.functions[index];
-        let compiled = lazy.get_or_init(|| self.compile(name, Shape::Work, as_entry));
+    fn work_routine<'c>(&self, code: &'c FunctionCode) -> Option<&'c Routine<Entry>> {
+        let compiled = code
+            .work
+            .get_or_init(|| self.compile(&code.name, Shape::Work, as_entry));
         compiled.as_ref().map(|c| &c.routine)
     }
 
-    fn dense_routine(&self, index: usize) -> Option<&Routine<Dense>> {
-        let compiled = self.dense[index].get_or_init(|| {
-            let name = &self.functions[index].0;
-            let output = self.ir.output(name, name)?;
-            self.compile(name, Shape::Dense(output), as_dense)
+    fn dense_routine<'c>(&self, code: &'c FunctionCode) -> Option<&'c Routine<Dense>> {
+        let compiled = code.dense.get_or_init(|| {
+            let output = self.ir.output(&code.name, &code.name)?;
+            self.compile(&code.name, Shape::Dense(output), as_dense)
         });
         compiled.as_ref().map(|c| &c.routine)
     }
@@ -494,13 +449,13 @@ impl NativeCode for JitCode {
     }
 
     fn eval(&self, function: &str, x: &[f64], u: &[f64], p: &[f64], work: &mut [f64]) -> bool {
-        let Some(index) = self.index(function) else {
+        let Some(code) = self.index(function).map(|i| &self.functions[i]) else {
             return false;
         };
-        let Some(routine) = self.work_routine(index) else {
+        let Some(routine) = self.work_routine(code) else {
             return false;
         };
-        if !routine.reads_within(x, u, p) || work.len() < self.functions[index].1 {
+        if !routine.reads_within(x, u, p) || work.len() < code.n_values {
             return false;
         }
         // SAFETY: the routine reads x, u, p within `reads` and writes work[..n_values] (the
@@ -516,13 +471,11 @@ impl NativeCode for JitCode {
         (rows, cols, stride): (usize, usize, usize),
         out: &mut [f64],
     ) -> bool {
-        let Some(index) = self.index(function) else {
+        let Some(code) = self.index(function).map(|i| &self.functions[i]) else {
             return false;
         };
-        let fits = self.shapes[index] == Some((rows, cols))
-            && cols <= stride
-            && out.len() == rows * stride;
-        let Some(routine) = self.dense_routine(index).filter(|_| fits) else {
+        let fits = code.shape == Some((rows, cols)) && cols <= stride && out.len() == rows * stride;
+        let Some(routine) = self.dense_routine(code).filter(|_| fits) else {
             return false;
         };
         if !routine.reads_within(x, u, p) {

@@ -16,14 +16,7 @@ use twv_model::Model;
 
 /// The shipped IR of `name`.
 fn shipped(name: &str) -> Ir {
-    let text = twv_generated::ir_json(name)
-        .or_else(|| {
-            twv_generated::INTERPRETED
-                .iter()
-                .find(|(n, _)| *n == name)
-                .map(|(_, t)| *t)
-        })
-        .unwrap_or_else(|| panic!("{name} is shipped"));
+    let text = twv_generated::shipped_ir_json(name).unwrap_or_else(|| panic!("{name} is shipped"));
     twv_ir::parse_ir(text, &format!("generated/ir/{name}.json")).expect("shipped IR is valid")
 }
 

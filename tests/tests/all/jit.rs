@@ -14,10 +14,8 @@ use crate::codegen::{same_mechanics, same_model, shipped_ir};
 fn pair<const NX: usize, const NU: usize>(
     name: &str,
 ) -> (Interpreted<NX, NU>, Interpreted<NX, NU>) {
-    let ir = match name {
-        "whipple" => twv_ir::parse_ir(twv_generated::INTERPRETED[0].1, "whipple.json").unwrap(),
-        _ => shipped_ir(name),
-    };
+    let text = twv_generated::shipped_ir_json(name).expect("a shipped model");
+    let ir = twv_ir::parse_ir(text, &format!("generated/ir/{name}.json")).unwrap();
     let native: Arc<dyn NativeCode> = twv_jit::compile(&ir).unwrap();
     let jit = Interpreted::with_native(&ir, &ir.defaults(), Some(native)).unwrap();
     let interpreted = Interpreted::new(&ir, &ir.defaults()).unwrap();
