@@ -182,6 +182,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("InputError", py.get_type::<InputError>())?;
     m.add("ModelError", py.get_type::<ModelError>())?;
     m.add("NumericalError", py.get_type::<NumericalError>())?;
+    m.add(
+        "SETTLED_TAIL_TOLERANCE",
+        twv_analysis::sweep::SETTLED_TAIL_TOLERANCE,
+    )?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_range, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_len, m)?)?;

@@ -171,28 +171,42 @@ def test_the_bicycles_speed_sweep():
 def test_sweep_equals_the_shard_file(vehicle8, tmp_path):
     import subprocess
 
-    subprocess.run(
-        [
-            str(twv_binary()),
-            "sweep",
-            "--kp",
-            "0:8000:6",
-            "--kd",
-            "0:4000:5",
-            "--metric",
-            "max-lyapunov",
-            "--out",
-            str(tmp_path),
-            "--quiet",
-        ],
-        check=True,
-    )
-    shard = json.loads((tmp_path / "shard-0-of-1.json").read_text())
-    py = twv.sweep(vehicle8, kp=(0, 8000, 6), kd=(0, 4000, 5), metric="max-lyapunov")
-    assert py.points == shard["points"]
-    assert py.value.shape == (1, 5, 6)
-    # Statuses: a fall below the critical Kp, an exponent above it.
-    assert (py.status[0, :, 0] == "fell").all()
+    points = {}
+    for full in (False, True):
+        out = tmp_path / ("full" if full else "tail")
+        subprocess.run(
+            [
+                str(twv_binary()),
+                "sweep",
+                "--kp",
+                "0:8000:6",
+                "--kd",
+                "0:4000:5",
+                "--metric",
+                "max-lyapunov",
+                "--out",
+                str(out),
+                "--quiet",
+                *(["--full-horizon"] if full else []),
+            ],
+            check=True,
+        )
+        shard = json.loads((out / "shard-0-of-1.json").read_text())
+        py = twv.sweep(
+            vehicle8, kp=(0, 8000, 6), kd=(0, 4000, 5), metric="max-lyapunov", full_horizon=full
+        )
+        assert py.points == shard["points"]
+        assert py.value.shape == (1, 5, 6)
+        # Statuses: a fall below the critical Kp, an exponent above it.
+        assert (py.status[0, :, 0] == "fell").all()
+        points[full] = py
+    # The settled tail: taken by some loops, each λ1 within its tolerance of the full run.
+    tail, full = points[False], points[True]
+    assert np.isnan(full.settled_at).all()
+    assert (~np.isnan(tail.settled_at)).sum() >= 5
+    ok = ~np.isnan(full.value)
+    assert (np.isnan(tail.value) == ~ok).all()
+    assert np.abs(tail.value[ok] - full.value[ok]).max() <= twv.SETTLED_TAIL_TOLERANCE
 
 
 def test_the_uncontrolled_bicycle_rides():

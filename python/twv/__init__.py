@@ -30,7 +30,14 @@ from ._jobs import (
     tune,
 )
 from ._model import Model, derive
-from ._native import InputError, ModelError, NumericalError, TwvError, shipped_models
+from ._native import (
+    SETTLED_TAIL_TOLERANCE,
+    InputError,
+    ModelError,
+    NumericalError,
+    TwvError,
+    shipped_models,
+)
 from ._results import (
     LinearResult,
     Result,
@@ -43,6 +50,7 @@ from ._results import (
 from ._settings import integrator, pid
 
 __all__ = [
+    "SETTLED_TAIL_TOLERANCE",
     "InputError",
     "LinearResult",
     "Model",

@@ -327,13 +327,16 @@ def sweep(
     params: dict[str, Any] | None = None,
     executor: Executor | None = None,
     shards: int | None = None,
+    full_horizon: bool = False,
 ) -> SweepResult:
     """A stability map over a (Kp, Kd[, Ki]) grid, each axis (lo, hi, n), and over model
     parameters, `params={"m2": (4, 20, 17), ...}` by the IR's parameter names (each slower than
     the gains and the ones before it): `max-lyapunov`, `spectral-abscissa` or `settling-time`,
     from a tilt [rad] under the controller's other settings. Runs in parallel in Rust; with an
     `executor` (a concurrent.futures pool, a dask.distributed Client) its shards run there
-    instead and are joined in index order."""
+    instead and are joined in index order. `max-lyapunov` finishes a loop that has come to
+    rest from its linearisation there (the settled tail: λ1 within `twv.SETTLED_TAIL_TOLERANCE` of
+    the full run, `settled_at` says when); `full_horizon=True` steps every point to the end."""
     grid: dict[str, Any] = {"kp": _axis("kp", kp), "kd": _axis("kd", kd), "ki": _axis("ki", ki)}
     if params:
         grid["params"] = [{"name": str(k), **_axis(str(k), v)} for k, v in params.items()]
@@ -345,6 +348,8 @@ def sweep(
     }
     if controller is not None:
         settings["controller"] = controller
+    if full_horizon:
+        settings["metric_settings"] = {"settle_distance": None}
     text = _settings_text(settings)
     if executor is None:
         raw, _ = _native.run("sweep", model._native, text)

@@ -140,7 +140,9 @@ def _axis_values(axis: dict[str, Any]) -> np.ndarray:
 class SweepResult:
     """A map over a (Kp, Kd[, Ki]) grid and model parameters: `value[..., p2, p1, ki, kd, kp]`
     (the parameter axes in reverse order in front; NaN unless `status` is ok) and `status` of
-    the same shape, with the axes `kp`, `kd`, `ki` and `params` ({name: values})."""
+    the same shape, with the axes `kp`, `kd`, `ki` and `params` ({name: values}); `settled_at`
+    [s] where a max-Lyapunov run came to rest and was finished from its linearisation (NaN
+    where it ran every step)."""
 
     def __init__(self, settings: dict[str, Any], points: list[dict[str, Any]]):
         self.settings = settings
@@ -161,12 +163,16 @@ class SweepResult:
             len(self.kp),
         )
         value = np.full(len(points), np.nan)
+        settled_at = np.full(len(points), np.nan)
         status = np.empty(len(points), dtype=object)
         for i, p in enumerate(points):
             if p["value"] is not None:
                 value[i] = p["value"]
+            if p.get("settled_at") is not None:
+                settled_at[i] = p["settled_at"]
             status[i] = p["status"]
         self.value = value.reshape(shape)
+        self.settled_at = settled_at.reshape(shape)
         self.status = status.reshape(shape)
 
     def __repr__(self) -> str:

@@ -104,6 +104,7 @@ impl SweepSettings {
             ));
         }
         self.controller.validate()?;
+        self.metric_settings.validate()?;
         if self.grid.params.iter().any(|a| a.name == TILT_AXIS) {
             if !nonlinear {
                 return Err(Error::input(
@@ -273,34 +274,21 @@ impl ControlTask for Chunk<'_> {
             },
             ..self.base.clone()
         };
-        let mut out = Vec::with_capacity(self.indices.len());
-        let mut rest = self.indices.clone();
-        if self.config.metric == Metric::MaxLyapunov {
+        let indices: Vec<usize> = self.indices.collect();
+        let controllers: Vec<ControllerSettings> =
+            indices.iter().map(|&i| controller_at(i)).collect();
+        let loops = controllers
+            .iter()
+            .map(|c| PidLoop::<_, NX, NU, NA>::new(model, c, plant))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(match self.config.metric {
             // Eight points at a time through the lanes kernel (same bits as one by one).
-            while rest.len() >= LANES {
-                let group: [usize; LANES] = std::array::from_fn(|l| rest.start + l);
-                let controllers: [ControllerSettings; LANES] = group.map(controller_at);
-                let loops = controllers
-                    .iter()
-                    .map(|c| PidLoop::<_, NX, NU, NA>::new(model, c, plant))
-                    .collect::<Result<Vec<_>, _>>()?;
-                let Ok(loops) = <[_; LANES]>::try_from(loops) else {
-                    unreachable!("one loop per point of the group")
-                };
-                out.extend(max_lyapunov_lanes(&loops, &x0, s, group));
-                rest.start += LANES;
-            }
-        }
-        for index in rest {
-            let controller = controller_at(index);
-            let field = PidLoop::<_, NX, NU, NA>::new(model, &controller, plant)?;
-            out.push(match self.config.metric {
-                Metric::MaxLyapunov => metric::max_lyapunov(&field, &x0, s, index),
-                Metric::SettlingTime => metric::settling_time(&field, &x0, s, index),
-                Metric::SpectralAbscissa => unreachable!("the linear metric runs without a model"),
-            });
-        }
-        Ok(out)
+            Metric::MaxLyapunov => max_lyapunov_lanes(&loops, &x0, s, &indices),
+            Metric::SettlingTime => (loops.iter().zip(indices))
+                .map(|(field, index)| metric::settling_time(field, &x0, s, index))
+                .collect(),
+            Metric::SpectralAbscissa => unreachable!("the linear metric runs without a model"),
+        })
     }
 }
 
@@ -704,8 +692,14 @@ fn run_shard_in(
 /// "N ok, M fell, …" for a summary line.
 pub fn status_counts(points: &[PointResult]) -> String {
     let count = |s: Status| points.iter().filter(|p| p.status == s).count();
+    let settled = points.iter().filter(|p| p.settled_at.is_some()).count();
+    let tail = if settled > 0 {
+        format!(" ({settled} finished by the settled tail)")
+    } else {
+        String::new()
+    };
     format!(
-        "{} ok, {} fell, {} blew up, {} not settled, {} failed",
+        "{} ok{tail}, {} fell, {} blew up, {} not settled, {} failed",
         count(Status::Ok),
         count(Status::Fell),
         count(Status::BlewUp),

@@ -40,6 +40,7 @@ pub use open_loop::OpenLoop;
 pub use projected::{project, Projected};
 pub use rk4::Rk4;
 pub(crate) use rk4::{equal_steps, rk4_step_each, Rk4Scratch};
+pub(crate) use state::eval_stage;
 pub use state::VarState;
 pub use stepper::{Stepper, StopReason};
 

@@ -101,11 +101,11 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Rk4<F, N, K> {
     fn rk4_step(&mut self, h: f64) -> bool {
         let (field, trace) = (&self.field, self.trace);
         let [finite] = rk4_step_each(
-            self.t,
-            h,
+            &[self.t],
+            &[h],
             core::array::from_mut(&mut self.y),
             &mut self.scratch,
-            |t, y, k| eval_stage(field, t, &y[0], trace, &mut k[0]),
+            |t, y, k| eval_stage(field, t[0], &y[0], trace, &mut k[0]),
         );
         finite
     }
@@ -127,48 +127,59 @@ impl<const N: usize, const K: usize, const L: usize> Rk4Scratch<N, K, L> {
     };
 }
 
-/// One RK4 step of size `h` from `t` for `L` independent states `y`, in four fused passes over
-/// each; `eval(t, states, derivatives)` gives the stage derivatives of all `L` at once (one
-/// state: the field; eight: a lanes kernel). Per state these are the same operations whatever
-/// `L` is, so a state stepped among others keeps the bits it has alone. Returns, per state,
-/// whether its new point is finite.
+/// One RK4 step for `L` independent states `y`, state `l` from time `t[l]` with step `h[l]`,
+/// in four fused passes over each; `eval(times, states, derivatives)` gives the stage
+/// derivatives of all `L` at once (one state: the field; eight: a lanes kernel). Per state
+/// these are the same operations whatever `L` is and whatever the others' times, so a state
+/// stepped among others keeps the bits it has alone. Returns, per state, whether its new point
+/// is finite.
 #[inline(always)]
 pub(crate) fn rk4_step_each<const N: usize, const K: usize, const L: usize>(
-    t: f64,
-    h: f64,
+    t: &[f64; L],
+    h: &[f64; L],
     y: &mut [VarState<N, K>; L],
     scratch: &mut Rk4Scratch<N, K, L>,
-    mut eval: impl FnMut(f64, &[VarState<N, K>; L], &mut [VarState<N, K>; L]),
+    mut eval: impl FnMut(&[f64; L], &[VarState<N, K>; L], &mut [VarState<N, K>; L]),
 ) -> [bool; L] {
-    let (half, sixth) = (0.5 * h, h / 6.0);
     let Rk4Scratch { k, acc, tmp } = scratch;
+    let mut half = [0.0; L];
+    let mut t_half = [0.0; L];
+    let mut t_end = [0.0; L];
+    for l in 0..L {
+        half[l] = 0.5 * h[l];
+        t_half[l] = t[l] + half[l];
+        t_end[l] = t[l] + h[l];
+    }
     eval(t, y, k);
     for l in 0..L {
+        let half = half[l];
         acc[l].zip_pair(&mut tmp[l], &y[l], &k[l], |a, s, y, k| {
             *a = k;
             *s = y + half * k;
         });
     }
-    eval(t + half, tmp, k);
+    eval(&t_half, tmp, k);
     for l in 0..L {
+        let half = half[l];
         acc[l].zip_pair(&mut tmp[l], &y[l], &k[l], |a, s, y, k| {
             *a += 2.0 * k;
             *s = y + half * k;
         });
     }
-    eval(t + half, tmp, k);
+    eval(&t_half, tmp, k);
     for l in 0..L {
+        let h = h[l];
         acc[l].zip_pair(&mut tmp[l], &y[l], &k[l], |a, s, y, k| {
             *a += 2.0 * k;
             *s = y + h * k;
         });
     }
-    eval(t + h, tmp, k);
+    eval(&t_end, tmp, k);
     // A plain loop, not `array::from_fn`: its closure was compiled out of line, outside the
     // AVX-512 and AVX2 builds of the steps (10 % of the study preset's time).
     let mut finite = [false; L];
     for l in 0..L {
-        finite[l] = y[l].add_sum_checked(sixth, &acc[l], &k[l]);
+        finite[l] = y[l].add_sum_checked(h[l] / 6.0, &acc[l], &k[l]);
     }
     finite
 }

@@ -19,7 +19,7 @@ use crate::control::{ControllerSettings, RunSettings, STUDY_PD};
 use crate::error::Result;
 use crate::lyapunov::{InitialBasis, LyapunovSettings};
 use crate::model::{ModelSource, ModelSpec, ResolvedModel};
-use crate::sweep::{Axis, Grid, Metric, PointResult};
+use crate::sweep::{Grid, Metric, PointResult};
 
 /// Sections computed (the progress steps).
 pub const STEPS: usize = 7;
@@ -196,20 +196,7 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
     progress.advance(1);
 
     let n = if quick { 21 } else { 61 };
-    let grid = Grid {
-        kp: Axis {
-            lo: 0.0,
-            hi: 8000.0,
-            n,
-        },
-        kd: Axis {
-            lo: 0.0,
-            hi: 4000.0,
-            n,
-        },
-        ki: None,
-        params: Vec::new(),
-    };
+    let grid = Grid::study_gains(n);
     let map = sweep(
         &v8,
         &SweepSettings::new(grid, Metric::SpectralAbscissa),
@@ -614,20 +601,7 @@ pub fn page(settings: &ReportSettings, r: &ReportResults) -> Result<(String, Vec
 
 /// The in-memory map of the report's sweep, for its figure and CSV.
 fn map_of(points: &[PointResult], n: usize) -> crate::sweep::Map {
-    let grid = Grid {
-        kp: Axis {
-            lo: 0.0,
-            hi: 8000.0,
-            n,
-        },
-        kd: Axis {
-            lo: 0.0,
-            hi: 4000.0,
-            n,
-        },
-        ki: None,
-        params: Vec::new(),
-    };
+    let grid = Grid::study_gains(n);
     crate::sweep::Map::in_memory("vehicle8", grid, Metric::SpectralAbscissa, points.to_vec())
 }
 

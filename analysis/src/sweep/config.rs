@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::error::SweepError;
 use super::grid::Grid;
 
 /// The quantity mapped over the grid.
@@ -30,8 +31,10 @@ impl Metric {
 }
 
 /// The fixed numerical settings of the nonlinear metrics (the study's preset), recorded so a
-/// shard computed by another build with other defaults is not mixed in.
+/// shard computed by another build with other defaults is not mixed in. Fields left out of a
+/// JSON request take their defaults.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct MetricSettings {
     /// RK4 step [s].
     pub h: f64,
@@ -49,11 +52,37 @@ pub struct MetricSettings {
     pub sample: f64,
     /// |Φ| beyond which the vehicle has fallen [rad].
     pub fall_angle: f64,
+    /// The max-Lyapunov metric's settled-tail shortcut: once the loop is at rest — its
+    /// pitch-loop state has at most this distance [state units] left to go at the rate its
+    /// tangent decays — the rest of the horizon is computed from the linearisation there in one
+    /// go (`sweep::settle`; λ1 moves by at most [`SETTLED_TAIL_TOLERANCE`](super::SETTLED_TAIL_TOLERANCE)).
+    /// `None` (JSON `null`, `twv sweep --full-horizon`) steps every point to the end.
+    pub settle_distance: Option<f64>,
+}
+
+/// The settled-tail shortcut's default distance (README, Stability maps: the 100 × 100 map's
+/// largest change of λ1 with it).
+fn default_settle_distance() -> Option<f64> {
+    Some(3e-3)
+}
+
+impl MetricSettings {
+    /// Checks what a point cannot report as its status (the rest ends a point's run as
+    /// `blew_up` or `failed`, like any other run that cannot go on).
+    pub fn validate(&self) -> Result<(), SweepError> {
+        match self.settle_distance {
+            Some(d) if !(d.is_finite() && d > 0.0) => Err(SweepError::Setting {
+                field: "settle_distance",
+                reason: format!("{d} must be a finite distance > 0 (null turns the shortcut off)"),
+            }),
+            _ => Ok(()),
+        }
+    }
 }
 
 impl Default for MetricSettings {
     /// The study's sampling (h = 1 ms, T = 0.1 s, K = 100) after a 1 s transient; 10 s runs
-    /// sampled every 10 ms; π/2.
+    /// sampled every 10 ms; π/2; the settled tail from 3·10⁻³.
     fn default() -> Self {
         Self {
             h: 1e-3,
@@ -63,6 +92,7 @@ impl Default for MetricSettings {
             t_end: 10.0,
             sample: 0.01,
             fall_angle: std::f64::consts::FRAC_PI_2,
+            settle_distance: default_settle_distance(),
         }
     }
 }

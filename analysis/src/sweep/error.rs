@@ -41,6 +41,9 @@ pub enum SweepError {
         indices: String,
         files: String,
     },
+    /// A metric setting out of range.
+    #[error("metric_settings.{field}: {reason}")]
+    Setting { field: &'static str, reason: String },
     /// Writing the output failed.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),

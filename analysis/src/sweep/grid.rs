@@ -142,6 +142,25 @@ pub struct Grid {
 }
 
 impl Grid {
+    /// The study's gain square, Kp 0–8000 N/rad × Kd 0–4000 N s/rad, at `n` × `n` points (what
+    /// the report and the map benchmark draw).
+    pub fn study_gains(n: usize) -> Self {
+        Self {
+            kp: Axis {
+                lo: 0.0,
+                hi: 8000.0,
+                n,
+            },
+            kd: Axis {
+                lo: 0.0,
+                hi: 4000.0,
+                n,
+            },
+            ki: None,
+            params: Vec::new(),
+        }
+    }
+
     /// Number of Ki values (1 without a Ki axis).
     pub fn n_ki(&self) -> usize {
         self.ki.map_or(1, |a| a.n)

@@ -1,115 +1,386 @@
-//! The max-Lyapunov metric at [`LANES`] grid points at once: the points' closed loops are
-//! stepped together so the model runs through its lanes kernel (one AVX-512 instruction stream
-//! for eight points, see `twv_kernels::lanes`) and a plain PD law as lane arrays
-//! ([`LoopLanes`]), while everything else is done point by point with the very code of the
-//! one-point path ([`rk4_step_each`], [`orthonormalize`]). Every point therefore gets the bits
-//! of [`metric::max_lyapunov`](super::metric::max_lyapunov) (`tests/tests/all/sweep_lanes.rs`
-//! checks it) and still depends only on its index.
+//! The max-Lyapunov metric of many grid points, run eight at a time: the points' closed loops
+//! are stepped together so the model runs through its lanes kernel (one vector instruction
+//! stream for eight points, see `twv_kernels::lanes`) and a plain PD law as lane arrays
+//! ([`LoopLanes`]), while everything else is done point by point with the code of the
+//! one-point metric ([`max_lyapunov`], which is this driver with one lane). Every point
+//! therefore gets the bits it has alone (`tests/tests/all/sweep_lanes.rs` checks it) and
+//! depends only on its index.
 //!
-//! The points share the time grid (same h, T and horizon), so one clock drives them all. A
-//! point that falls, blows up or degenerates is finished with that status and from then on put
-//! back to its start state after every step (its results are ignored; a finite state near the
-//! start keeps the lanes kernel on its fast path); the group stops when every point is finished.
+//! Each lane keeps its own clock and schedule, so a lane whose point has finished — it fell,
+//! blew up, degenerated, reached the end of its horizon or came to rest (the settled tail,
+//! [`super::settle`]) — takes the next point of the chunk at once instead of riding along
+//! until the slowest of its group is done. A lane with nothing left to run is parked at a
+//! finite start state (which keeps the lanes kernel on its fast path) and its results ignored.
 
 use twv_kernels::lanes::LANES;
 use twv_model::Model;
 
 use super::config::MetricSettings;
-use super::metric::{lyapunov_settings, max_lyapunov, result};
+use super::metric::{lyapunov_settings, result};
 use super::point::{PointResult, Status};
+use super::settle::{at_rest, tail_log_growth};
 use crate::control::{loop_states, LoopLanes, PidLoop};
-use crate::integrate::{equal_steps, project, rk4_step_each, Rk4Scratch, VarState};
-use crate::lyapunov::{initial_basis, orthonormalize};
+use crate::integrate::{
+    equal_steps, eval_stage, project, rk4_step_each, Projected, Rk4Scratch, VarState,
+};
+use crate::lyapunov::{initial_basis, orthonormalize, InitialBasis};
 
-/// λ1 of the closed loops `loops[l]` (the grid points `indices[l]`) from the model state `x0`:
-/// exactly what [`max_lyapunov`] gives for each, computed eight at a time.
+/// λ1 of the closed loops `loops` (the grid points `indices`) from the model state `x0`, in
+/// that order: exactly what [`max_lyapunov`] gives for each, eight at a time (fewer than eight
+/// points run one by one).
 pub fn max_lyapunov_lanes<M, const NX: usize, const NU: usize, const NA: usize>(
-    loops: &[PidLoop<'_, M, NX, NU, NA>; LANES],
+    loops: &[PidLoop<'_, M, NX, NU, NA>],
     x0: &[f64; NX],
     s: &MetricSettings,
-    indices: [usize; LANES],
-) -> [PointResult; LANES]
+    indices: &[usize],
+) -> Vec<PointResult>
 where
     M: Model<NX, NU>,
 {
-    let settings = lyapunov_settings(s);
-    let start: [VarState<NA, 1>; LANES] = core::array::from_fn(|l| {
-        VarState::new(loops[l].initial_state(x0), initial_basis(&settings.basis))
-    });
-    // What the one-point path reports as an error before its first step (invalid settings or
-    // step, a non-finite start) is left to it.
-    let plain = settings.validate().is_err()
-        || !(s.h.is_finite() && s.h > 0.0)
-        || start.iter().any(|y| y.non_finite_part().is_some());
-    if plain {
-        return core::array::from_fn(|l| max_lyapunov(&loops[l], x0, s, indices[l]));
+    assert_eq!(loops.len(), indices.len(), "one grid index per loop");
+    if loops.len() < LANES {
+        return (loops.iter().zip(indices))
+            .map(|(lp, &index)| max_lyapunov(lp, x0, s, index))
+            .collect();
     }
-    let keep: [[bool; NA]; LANES] = core::array::from_fn(|l| loop_states(&loops[l], &[start[l].x]));
+    let first = core::array::from_fn(|l| loops[l]);
+    drive(LoopLanes::new(first), loops, x0, s, indices)
+}
 
-    let phi = loops[0].plant().measured.phi;
-    let field = LoopLanes::new(loops);
-    let mut y = start;
-    let mut scratch = Rk4Scratch::<NA, 1, LANES>::ZERO;
-    let mut finished: [Option<Status>; LANES] = [None; LANES];
-    let mut log_sum = [0.0; LANES];
-    let mut t = 0.0;
-    // The interval ends of `lyapunov_spectrum_with`: the transient's, then K measured ones
-    // counted from its end, each reached in equal steps of about h.
-    let n_transient = (settings.transient / settings.t_sample * (1.0 - 1e-12)).ceil() as usize;
-    let t0 = settings.transient;
-    let ends = (1..=n_transient)
-        .map(|i| {
-            let end = if i == n_transient {
-                settings.transient
-            } else {
-                i as f64 * settings.t_sample
+/// λ1 of the closed loop's pitch-loop coordinates ([`loop_states`]: the tangent dynamics with
+/// the drift directions projected off) from the model state `x0`: the Benettin run of
+/// [`lyapunov_settings`] (RK4, one tangent vector from e₁, re-orthonormalised every T, averaged
+/// after the transient), `Fell` as soon as |Φ| passes the fall angle (the run stops there), and
+/// with `s.settle` the settled-tail shortcut ([`super::settle`]).
+pub fn max_lyapunov<M, const NX: usize, const NU: usize, const NA: usize>(
+    field: &PidLoop<'_, M, NX, NU, NA>,
+    x0: &[f64; NX],
+    s: &MetricSettings,
+    index: usize,
+) -> PointResult
+where
+    M: Model<NX, NU>,
+{
+    let mut one = drive(One(*field), core::slice::from_ref(field), x0, s, &[index]);
+    one.remove(0)
+}
+
+/// `L` closed loops evaluated together, one per lane, each lane's loop replaceable.
+trait LoopGroup<'a, M, const NX: usize, const NU: usize, const NA: usize, const L: usize> {
+    /// Lane `lane` runs `lp` from now on.
+    fn set(&mut self, lane: usize, lp: PidLoop<'a, M, NX, NU, NA>);
+    /// The stage derivatives of every lane (`t[l]`, `y[l]` → `dy[l]`).
+    fn eval(&self, t: &[f64; L], y: &[VarState<NA, 1>; L], dy: &mut [VarState<NA, 1>; L]);
+}
+
+impl<'a, M, const NX: usize, const NU: usize, const NA: usize> LoopGroup<'a, M, NX, NU, NA, LANES>
+    for LoopLanes<'a, M, NX, NU, NA>
+where
+    M: Model<NX, NU>,
+{
+    fn set(&mut self, lane: usize, lp: PidLoop<'a, M, NX, NU, NA>) {
+        LoopLanes::set(self, lane, lp);
+    }
+
+    #[inline(always)]
+    fn eval(
+        &self,
+        t: &[f64; LANES],
+        y: &[VarState<NA, 1>; LANES],
+        dy: &mut [VarState<NA, 1>; LANES],
+    ) {
+        LoopLanes::eval(self, t, y, dy);
+    }
+}
+
+/// One loop alone: the field's own evaluation (the one-point metric).
+struct One<'a, M, const NX: usize, const NU: usize, const NA: usize>(PidLoop<'a, M, NX, NU, NA>);
+
+impl<'a, M, const NX: usize, const NU: usize, const NA: usize> LoopGroup<'a, M, NX, NU, NA, 1>
+    for One<'a, M, NX, NU, NA>
+where
+    M: Model<NX, NU>,
+{
+    fn set(&mut self, _lane: usize, lp: PidLoop<'a, M, NX, NU, NA>) {
+        self.0 = lp;
+    }
+
+    #[inline(always)]
+    fn eval(&self, t: &[f64; 1], y: &[VarState<NA, 1>; 1], dy: &mut [VarState<NA, 1>; 1]) {
+        eval_stage(&self.0, t[0], &y[0], false, &mut dy[0]);
+    }
+}
+
+/// The interval ends of `lyapunov_spectrum_with`: the transient's, then the measured ones
+/// counted from its end, each reached in equal steps of about h.
+struct Schedule {
+    n_transient: usize,
+    transient: f64,
+    t_sample: f64,
+    intervals: usize,
+}
+
+impl Schedule {
+    fn new(s: &MetricSettings) -> Self {
+        let n_transient = (s.transient / s.t_sample * (1.0 - 1e-12)).ceil() as usize;
+        Self {
+            n_transient,
+            transient: s.transient,
+            t_sample: s.t_sample,
+            intervals: n_transient + s.iterations,
+        }
+    }
+
+    /// The end of interval `i` (1-based).
+    fn end(&self, i: usize) -> f64 {
+        if i > self.n_transient {
+            self.transient + (i - self.n_transient) as f64 * self.t_sample
+        } else if i == self.n_transient {
+            self.transient
+        } else {
+            i as f64 * self.t_sample
+        }
+    }
+
+    /// The averaging horizon (the measured intervals).
+    fn horizon(&self) -> f64 {
+        self.end(self.intervals) - self.transient
+    }
+}
+
+/// How a point's run ended: its status, λ1 and when it came to rest.
+struct End {
+    status: Status,
+    value: Option<f64>,
+    settled_at: Option<f64>,
+}
+
+impl End {
+    fn without_value(status: Status) -> Self {
+        Self {
+            status,
+            value: None,
+            settled_at: None,
+        }
+    }
+}
+
+/// One point's run: where it is in its schedule and what it has measured so far.
+#[derive(Clone, Copy)]
+struct Run<const NA: usize> {
+    /// The point's position in the chunk.
+    point: usize,
+    start: VarState<NA, 1>,
+    keep: [bool; NA],
+    /// The current interval (1-based), its end, its steps still to take and their size.
+    interval: usize,
+    t_stop: f64,
+    steps_left: u64,
+    h: f64,
+    t: f64,
+    log_sum: f64,
+}
+
+impl<const NA: usize> Run<NA> {
+    /// The run of point `point` (loop `lp`) from `x0`, or how it ends before its first step:
+    /// an invalid step or a non-finite start blows up, invalid settings fail, as in the
+    /// Benettin driver.
+    fn start<M, const NX: usize, const NU: usize>(
+        lp: &PidLoop<'_, M, NX, NU, NA>,
+        x0: &[f64; NX],
+        s: &MetricSettings,
+        schedule: &Schedule,
+        point: usize,
+    ) -> Result<Self, Status>
+    where
+        M: Model<NX, NU>,
+    {
+        let start = VarState::new(lp.initial_state(x0), initial_basis(&InitialBasis::Identity));
+        if !(s.h.is_finite() && s.h > 0.0) || start.non_finite_part().is_some() {
+            return Err(Status::BlewUp);
+        }
+        if lyapunov_settings(s).validate().is_err() {
+            return Err(Status::Failed);
+        }
+        let mut run = Self {
+            point,
+            start,
+            keep: loop_states(lp, &[start.x]),
+            interval: 0,
+            t_stop: 0.0,
+            steps_left: 0,
+            h: s.h,
+            t: 0.0,
+            log_sum: 0.0,
+        };
+        run.next_interval(s, schedule);
+        Ok(run)
+    }
+
+    fn next_interval(&mut self, s: &MetricSettings, schedule: &Schedule) {
+        self.interval += 1;
+        self.t_stop = schedule.end(self.interval);
+        (self.steps_left, self.h) = equal_steps(self.t_stop - self.t, s.h);
+    }
+
+    /// Books the step just taken to `y` (`finite`: whether it is); `Some` when the run ended.
+    #[inline(always)]
+    fn after_step<M, const NX: usize, const NU: usize>(
+        &mut self,
+        y: &mut VarState<NA, 1>,
+        finite: bool,
+        lp: &PidLoop<'_, M, NX, NU, NA>,
+        s: &MetricSettings,
+        schedule: &Schedule,
+    ) -> Option<End>
+    where
+        M: Model<NX, NU>,
+    {
+        if !finite {
+            return Some(End::without_value(Status::BlewUp));
+        }
+        if y.x[lp.plant().measured.phi].abs() > s.fall_angle {
+            return Some(End::without_value(Status::Fell));
+        }
+        self.steps_left -= 1;
+        if self.steps_left > 0 {
+            self.t += self.h;
+            return None;
+        }
+        self.t = self.t_stop;
+        self.interval_end(y, lp, s, schedule)
+    }
+
+    /// Re-orthonormalises at an interval end, adds a measured interval's growth, and ends the
+    /// run at the horizon or when the loop has come to rest.
+    #[cold]
+    fn interval_end<M, const NX: usize, const NU: usize>(
+        &mut self,
+        y: &mut VarState<NA, 1>,
+        lp: &PidLoop<'_, M, NX, NU, NA>,
+        s: &MetricSettings,
+        schedule: &Schedule,
+    ) -> Option<End>
+    where
+        M: Model<NX, NU>,
+    {
+        let r = orthonormalize(&mut y.w)[0];
+        if !(r.is_finite() && r > 0.0) {
+            return Some(End::without_value(Status::Failed));
+        }
+        if self.interval > schedule.n_transient {
+            self.log_sum += r.ln();
+            let done = |log_sum: f64, settled_at| End {
+                status: Status::Ok,
+                value: Some(log_sum / schedule.horizon()),
+                settled_at,
             };
-            (end, false)
-        })
-        .chain((1..=settings.iterations).map(|i| (t0 + i as f64 * settings.t_sample, true)));
-    'intervals: for (t_stop, measured) in ends {
-        let (steps, h) = equal_steps(t_stop - t, s.h);
-        for step in 1..=steps {
-            let finite = rk4_step_each(t, h, &mut y, &mut scratch, |t, y, dy| {
-                field.eval(t, y, dy);
-                for (d, k) in dy.iter_mut().zip(&keep) {
-                    project(k, &mut d.w[0]);
-                }
-            });
-            t = if step == steps { t_stop } else { t + h };
-            for l in 0..LANES {
-                if finished[l].is_none() {
-                    if !finite[l] {
-                        finished[l] = Some(Status::BlewUp);
-                    } else if y[l].x[phi].abs() > s.fall_angle {
-                        finished[l] = Some(Status::Fell);
-                    }
-                }
-                if finished[l].is_some() {
-                    y[l] = start[l];
-                }
+            if self.interval == schedule.intervals {
+                return Some(done(self.log_sum, None));
             }
-            if finished.iter().all(Option::is_some) {
-                break 'intervals;
+            if let Some(tail) = self.settled_tail(y, lp, s, schedule, r.ln() / s.t_sample) {
+                return Some(done(self.log_sum + tail, Some(self.t)));
             }
         }
-        for l in 0..LANES {
-            if finished[l].is_some() {
-                continue;
+        self.next_interval(s, schedule);
+        None
+    }
+
+    /// Σ ln R of the rest of the horizon when the loop is at rest (`rate`: this interval's
+    /// local exponent) and the shortcut is on.
+    fn settled_tail<M, const NX: usize, const NU: usize>(
+        &self,
+        y: &VarState<NA, 1>,
+        lp: &PidLoop<'_, M, NX, NU, NA>,
+        s: &MetricSettings,
+        schedule: &Schedule,
+        rate: f64,
+    ) -> Option<f64>
+    where
+        M: Model<NX, NU>,
+    {
+        let distance = s.settle_distance?;
+        let field = Projected {
+            field: lp,
+            keep: self.keep,
+        };
+        if !at_rest(&field, self.t, &y.x, &self.keep, rate, distance) {
+            return None;
+        }
+        let steps = (self.interval + 1..=schedule.intervals)
+            .map(|i| equal_steps(schedule.end(i) - schedule.end(i - 1), s.h).0)
+            .sum();
+        let h = equal_steps(s.t_sample, s.h).1;
+        tail_log_growth(&field, self.t, &y.x, &y.w[0], h, steps)
+    }
+}
+
+/// Runs every loop of `loops` through the `L` lanes of `group` (whose lanes may hold any loops
+/// of the same model to begin with), refilling a lane as soon as its point is done.
+fn drive<'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize>(
+    mut group: G,
+    loops: &[PidLoop<'a, M, NX, NU, NA>],
+    x0: &[f64; NX],
+    s: &MetricSettings,
+    indices: &[usize],
+) -> Vec<PointResult>
+where
+    G: LoopGroup<'a, M, NX, NU, NA, L>,
+    M: Model<NX, NU>,
+{
+    let schedule = Schedule::new(s);
+    let mut results: Vec<Option<PointResult>> = vec![None; loops.len()];
+    let finish = |results: &mut Vec<Option<PointResult>>, point: usize, end: End| {
+        let g = loops[point].settings().pitch.gains;
+        let mut r = result(indices[point], &g, end.value, end.status);
+        r.settled_at = end.settled_at.filter(|_| r.status == Status::Ok);
+        results[point] = Some(r);
+    };
+    let mut runs: [Option<Run<NA>>; L] = [None; L];
+    let mut y = [VarState::<NA, 1>::ZERO; L];
+    let mut parked = [VarState::<NA, 1>::ZERO; L];
+    let mut keep = [[true; NA]; L];
+    let mut scratch = Rk4Scratch::<NA, 1, L>::ZERO;
+    let mut next = 0;
+    loop {
+        // Idle lanes take the next points; a point that ends before its first step is booked.
+        for l in 0..L {
+            while runs[l].is_none() && next < loops.len() {
+                let point = next;
+                next += 1;
+                match Run::start(&loops[point], x0, s, &schedule, point) {
+                    Ok(run) => {
+                        group.set(l, loops[point]);
+                        (y[l], parked[l], keep[l]) = (run.start, run.start, run.keep);
+                        runs[l] = Some(run);
+                    }
+                    Err(status) => finish(&mut results, point, End::without_value(status)),
+                }
             }
-            let r = orthonormalize(&mut y[l].w)[0];
-            if !(r.is_finite() && r > 0.0) {
-                finished[l] = Some(Status::Failed);
-            } else if measured {
-                log_sum[l] += r.ln();
+        }
+        if runs.iter().all(Option::is_none) {
+            break;
+        }
+        let t: [f64; L] = core::array::from_fn(|l| runs[l].as_ref().map_or(0.0, |r| r.t));
+        let h: [f64; L] = core::array::from_fn(|l| runs[l].as_ref().map_or(s.h, |r| r.h));
+        let finite = rk4_step_each(&t, &h, &mut y, &mut scratch, |t, y, dy| {
+            group.eval(t, y, dy);
+            for (d, k) in dy.iter_mut().zip(&keep) {
+                project(k, &mut d.w[0]);
+            }
+        });
+        for l in 0..L {
+            let Some(run) = &mut runs[l] else {
+                y[l] = parked[l];
+                continue;
+            };
+            let point = run.point;
+            if let Some(end) = run.after_step(&mut y[l], finite[l], &loops[point], s, &schedule) {
+                finish(&mut results, point, end);
+                runs[l] = None;
+                y[l] = parked[l];
             }
         }
     }
-    core::array::from_fn(|l| {
-        let g = loops[l].settings().pitch.gains;
-        match finished[l] {
-            Some(status) => result(indices[l], &g, None, status),
-            None => result(indices[l], &g, Some(log_sum[l] / (t - t0)), Status::Ok),
-        }
-    })
+    results.into_iter().flatten().collect()
 }

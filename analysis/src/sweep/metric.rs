@@ -2,20 +2,15 @@
 //! sweep config (identity tangent basis, fixed tilt, fixed-step RK4), so a point's result
 //! depends only on its index; a point that falls or blows up gets a status, not an error.
 
-use std::cell::Cell;
-
 use twv_model::Model;
 
 use super::config::MetricSettings;
-use super::fall::FallStop;
 use super::point::{PointResult, Status};
-use crate::control::{loop_states, run_closed_loop, ControlError, PidLoop, RunEnd, RunSettings};
-use crate::integrate::{Projected, Rk4};
+use crate::control::{run_closed_loop, ControlError, PidLoop, RunEnd, RunSettings};
 use crate::linear::{LoopOptions, PidGains, PitchLoop};
-use crate::lyapunov::{
-    initial_basis, lyapunov_spectrum_with, InitialBasis, IntegratorChoice, LyapunovError,
-    LyapunovSettings,
-};
+use crate::lyapunov::{InitialBasis, IntegratorChoice, LyapunovSettings};
+
+pub use super::lanes::max_lyapunov;
 
 /// The point's record: a non-finite value counts as `Failed`.
 pub(super) fn result(
@@ -37,6 +32,7 @@ pub(super) fn result(
         kd: g.kd,
         value,
         status,
+        settled_at: None,
     }
 }
 
@@ -61,46 +57,6 @@ pub fn lyapunov_settings(s: &MetricSettings) -> LyapunovSettings {
         trace_check: false,
         record_running: false,
         ..LyapunovSettings::preset_paper()
-    }
-}
-
-/// λ1 of the closed loop's pitch-loop coordinates ([`loop_states`]: the tangent dynamics with
-/// the drift directions projected off) from the model state `x0`; `Fell` as soon as |Φ| passes
-/// the fall angle (the run stops there: see [`FallStop`]).
-pub fn max_lyapunov<M, const NX: usize, const NU: usize, const NA: usize>(
-    field: &PidLoop<'_, M, NX, NU, NA>,
-    x0: &[f64; NX],
-    s: &MetricSettings,
-    index: usize,
-) -> PointResult
-where
-    M: Model<NX, NU>,
-{
-    let g = field.settings().pitch.gains;
-    let settings = lyapunov_settings(s);
-    let fell = Cell::new(false);
-    let xa = field.initial_state(x0);
-    let projected = Projected {
-        field,
-        keep: loop_states(field, &[xa]),
-    };
-    let w0 = initial_basis::<NA, 1>(&settings.basis);
-    let outcome = Rk4::new(projected, 0.0, xa, w0, s.h, false)
-        .map_err(LyapunovError::from)
-        .and_then(|inner| {
-            let stepper = FallStop {
-                inner,
-                phi: field.plant().measured.phi,
-                limit: s.fall_angle,
-                fell: &fell,
-            };
-            lyapunov_spectrum_with::<_, NA, 1>(stepper, &settings)
-        });
-    match outcome {
-        _ if fell.get() => result(index, &g, None, Status::Fell),
-        Ok(r) => result(index, &g, r.exponents.first().copied(), Status::Ok),
-        Err(LyapunovError::Integrate(_)) => result(index, &g, None, Status::BlewUp),
-        Err(_) => result(index, &g, None, Status::Failed),
     }
 }
 

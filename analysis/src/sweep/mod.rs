@@ -7,9 +7,10 @@
 //! - [`Shard`]: `i/N`, or from a Slurm array / Kubernetes indexed job ([`Shard::from_env`]).
 //! - [`SweepConfig`]: everything a point depends on besides its index, hashed so shards of
 //!   different sweeps are never merged.
-//! - [`metric`]: the three metrics at one point ([`max_lyapunov_lanes`]: λ1 at eight points
-//!   at once, with the bits of the one-point metric); [`ShardFile`]: the shard format;
-//!   [`merge()`]: the merge.
+//! - [`metric`]: the three metrics at one point ([`max_lyapunov_lanes`]: λ1 of a chunk of
+//!   points eight at a time, with the bits of the one-point metric; `settle`: its settled
+//!   tail, within [`SETTLED_TAIL_TOLERANCE`]); [`ShardFile`]: the shard format; [`merge()`]:
+//!   the merge.
 //!
 //! Running the points (model dispatch, rayon, progress) is the CLI's job (`cli/sweep.rs`).
 
@@ -22,6 +23,7 @@ mod lanes;
 mod merge;
 pub mod metric;
 mod point;
+mod settle;
 mod shard;
 
 pub use config::{Metric, MetricSettings, SweepConfig};
@@ -32,4 +34,5 @@ pub use grid::{Axis, Grid, ParamAxis, TILT_AXIS};
 pub use lanes::max_lyapunov_lanes;
 pub use merge::{collect, merge, Map, MAP_FORMAT};
 pub use point::{PointResult, Status};
+pub use settle::SETTLED_TAIL_TOLERANCE;
 pub use shard::Shard;

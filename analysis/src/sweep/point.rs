@@ -42,6 +42,11 @@ pub struct PointResult {
     /// The metric, `None` unless `status` is `ok` (JSON has no NaN or ∞).
     pub value: Option<f64>,
     pub status: Status,
+    /// When the max-Lyapunov run came to rest and the rest of its horizon was computed from
+    /// the linearisation there [s] (the settled tail, `sweep::settle`); absent when every step
+    /// was taken.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub settled_at: Option<f64>,
 }
 
 impl PointResult {

@@ -275,6 +275,7 @@ fn the_exponent_verdict_follows_the_value_and_its_resolution() {
         kd: 1.0,
         value,
         status,
+        settled_at: None,
     };
     let v = |value, status| exponent_verdict(&point(value, status), 0.5);
     assert_eq!(v(Some(-0.6), Status::Ok), ExponentVerdict::Stable);

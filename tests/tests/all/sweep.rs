@@ -214,6 +214,28 @@ fn lyapunov_map_has_statuses_not_aborts() {
 }
 
 #[test]
+fn a_settle_distance_that_is_not_a_distance_is_refused_by_name() {
+    for bad in [0.0, -1e-3, f64::NAN, f64::INFINITY] {
+        let mut settings = lyapunov();
+        settings.metric_settings.settle_distance = Some(bad);
+        let e = sweep(&vehicle8(), &settings, &Silent)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("metric_settings.settle_distance")
+                && e.contains("null turns the shortcut off"),
+            "{bad}: {e}"
+        );
+    }
+    // A request that leaves fields out gets their defaults; null turns the tail off.
+    let partial: twv_analysis::sweep::MetricSettings =
+        serde_json::from_str(r#"{"settle_distance": null, "iterations": 20}"#).unwrap();
+    assert_eq!(partial.settle_distance, None);
+    assert_eq!(partial.iterations, 20);
+    assert_eq!(partial.h, twv_analysis::sweep::MetricSettings::default().h);
+}
+
+#[test]
 fn spectral_boundary_is_kp_equal_mx_g() {
     let model = vehicle8();
     let p = |n: &str| model.param(n).unwrap();

@@ -1,8 +1,10 @@
-//! The sweep's eight-at-a-time max-Lyapunov metric (`max_lyapunov_lanes`, lanes kernel) gives
-//! every point exactly the bits and status of the one-point metric (`metric::max_lyapunov`),
-//! whatever mix of outcomes shares a group, for PD (the lane-wise law: plain, saturated, about
-//! a constant lean), PID with saturation and every controller part, with the AVX-512 and AVX2
-//! lanes kernels and with the one-lane-at-a-time fallback.
+//! The sweep's eight-at-a-time max-Lyapunov metric (`max_lyapunov_lanes`, lanes kernel, lanes
+//! refilled as their points finish) gives every point exactly the bits and status of the
+//! one-point metric (`metric::max_lyapunov`), whatever mix of outcomes shares a group, for PD
+//! (the lane-wise law: plain, saturated, about a constant lean), PID with saturation and every
+//! controller part, with the AVX-512 and AVX2 lanes kernels and with the one-lane-at-a-time
+//! fallback. The one-point metric is the library's Benettin run (`lyapunov_spectrum_with`)
+//! bit for bit, and its settled tail moves λ1 by at most its stated tolerance.
 
 use twv_analysis::control::{
     AntiWindup, ControllerSettings, PidLoop, PitchPid, Plant, Profile, Setpoint, VelocityLoop,
@@ -36,8 +38,20 @@ const GAINS: [(f64, f64); LANES] = [
     (1.0e306, 0.0),
 ];
 
-/// Runs both paths for `base` with the gains above (plus `ki`), compares every point.
-fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> Vec<Status> {
+/// More points for the lanes to take as others finish: loops that come to rest early (their
+/// settled tail is taken), late, slowly and not at all (a slow divergence, an oscillation).
+const MORE: [(f64, f64); 6] = [
+    (4667.0, 1667.0),
+    (7333.0, 3000.0),
+    (1333.0, 3667.0),
+    (667.0, 3000.0),
+    (1333.0, 0.0),
+    (3333.0, 833.0),
+];
+
+/// Runs both paths for `base` with the gains above (plus `ki`), compares every point; returns
+/// the points.
+fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> Vec<PointResult> {
     let model = Vehicle8::with_defaults();
     let plant = plant(&model);
     let s = MetricSettings {
@@ -48,6 +62,7 @@ fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> V
     x0[plant.measured.phi] = 0.1;
     let settings: Vec<ControllerSettings> = GAINS
         .iter()
+        .chain(&MORE)
         .map(|&(kp, kd)| ControllerSettings {
             pitch: PitchPid {
                 gains: PidGains { kp, ki, kd },
@@ -60,21 +75,22 @@ fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> V
         .iter()
         .map(|c| PidLoop::new(&model, c, plant).unwrap())
         .collect();
-    let loops: [_; LANES] = loops.try_into().unwrap_or_else(|_| unreachable!());
-    let indices: [usize; LANES] = std::array::from_fn(|l| 100 + 7 * l);
-    let one: Vec<PointResult> = (0..LANES)
+    let indices: Vec<usize> = (0..loops.len()).map(|l| 100 + 7 * l).collect();
+    let one: Vec<PointResult> = (0..loops.len())
         .map(|l| metric::max_lyapunov(&loops[l], &x0, &s, indices[l]))
         .collect();
     use twv_kernels::isa::{force, Isa};
     // Each build this CPU can run (a lower one is what `force` falls back to otherwise).
     for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
         let used = force(isa);
-        let lanes = max_lyapunov_lanes(&loops, &x0, &s, indices);
+        let lanes = max_lyapunov_lanes(&loops, &x0, &s, &indices);
+        assert_eq!(lanes.len(), one.len(), "{what}: one result per point");
         for (a, b) in lanes.iter().zip(&one) {
             let tag = format!("{what} ({} kernel) point {}", used.name(), b.index);
             assert_eq!(a.index, b.index, "{tag}");
             assert_eq!((a.kp, a.ki, a.kd), (b.kp, b.ki, b.kd), "{tag}");
             assert_eq!(a.status, b.status, "{tag}");
+            assert_eq!(a.settled_at, b.settled_at, "{tag}");
             assert_eq!(
                 a.value.map(f64::to_bits),
                 b.value.map(f64::to_bits),
@@ -85,20 +101,28 @@ fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> V
         }
     }
     force(Isa::Avx512);
-    one.iter().map(|p| p.status).collect()
+    one
 }
 
 #[test]
 fn lanes_metric_has_the_bits_of_the_one_point_metric() {
     // The study's PD with its 0.03 sin Φ setpoint (what `twv sweep` maps by default).
     let pd = ControllerSettings::default();
-    let statuses = compare::<8>(&pd, 0.0, "PD");
+    let points = compare::<8>(&pd, 0.0, "PD");
+    let statuses: Vec<Status> = points.iter().map(|p| p.status).collect();
     for wanted in [Status::Ok, Status::Fell, Status::BlewUp] {
         assert!(
             statuses.contains(&wanted),
             "the PD group should contain a {wanted:?} point: {statuses:?}"
         );
     }
+    // Lanes refilled from a settled point as well as from a finished horizon.
+    let settled = points.iter().filter(|p| p.settled_at.is_some()).count();
+    let full = points.iter().filter(|p| p.status == Status::Ok).count() - settled;
+    assert!(
+        settled > 0 && full > 0,
+        "the PD points should include settled ({settled}) and full-horizon ({full}) runs"
+    );
 
     // PD with a force limit some gains reach (the lane-wise law's saturated branch), and PD
     // about a constant lean (its setpoint without a Φ-derivative).
@@ -151,4 +175,165 @@ fn lanes_metric_has_the_bits_of_the_one_point_metric() {
         }),
     };
     compare::<11>(&all, 400.0, "every controller part");
+}
+
+/// The metric's run, written with the library's pieces as `metric::max_lyapunov` was before it
+/// had its own driver: RK4 on the projected loop, stopped at a fall, through the Benettin
+/// driver of `twv lyap` with the metric's settings.
+fn benettin_reference(
+    lp: &PidLoop<'_, Vehicle8, 8, 2, 8>,
+    x0: &[f64; 8],
+    s: &MetricSettings,
+) -> PointResult {
+    use std::cell::Cell;
+    use twv_analysis::control::loop_states;
+    use twv_analysis::integrate::{Projected, Rk4};
+    use twv_analysis::lyapunov::{initial_basis, lyapunov_spectrum_with, LyapunovError};
+    use twv_analysis::sweep::FallStop;
+    let settings = metric::lyapunov_settings(s);
+    let fell = Cell::new(false);
+    let xa = lp.initial_state(x0);
+    let projected = Projected {
+        field: lp,
+        keep: loop_states(lp, &[xa]),
+    };
+    let w0 = initial_basis::<8, 1>(&settings.basis);
+    let outcome = Rk4::new(projected, 0.0, xa, w0, s.h, false)
+        .map_err(LyapunovError::from)
+        .and_then(|inner| {
+            let stepper = FallStop {
+                inner,
+                phi: lp.plant().measured.phi,
+                limit: s.fall_angle,
+                fell: &fell,
+            };
+            lyapunov_spectrum_with::<_, 8, 1>(stepper, &settings)
+        });
+    let (value, status) = match outcome {
+        _ if fell.get() => (None, Status::Fell),
+        Ok(r) => (r.exponents.first().copied(), Status::Ok),
+        Err(LyapunovError::Integrate(_)) => (None, Status::BlewUp),
+        Err(_) => (None, Status::Failed),
+    };
+    let value = value.filter(|v| v.is_finite());
+    PointResult {
+        index: 0,
+        kp: lp.settings().pitch.gains.kp,
+        ki: lp.settings().pitch.gains.ki,
+        kd: lp.settings().pitch.gains.kd,
+        status: if status == Status::Ok && value.is_none() {
+            Status::Failed
+        } else {
+            status
+        },
+        value,
+        settled_at: None,
+    }
+}
+
+/// The PD loops of `gains` on the default vehicle, and the tilted start.
+fn pd_loops<'a>(
+    model: &'a Vehicle8,
+    settings: &'a [ControllerSettings],
+) -> (Vec<PidLoop<'a, Vehicle8, 8, 2, 8>>, [f64; 8]) {
+    let plant = plant(model);
+    let loops = settings
+        .iter()
+        .map(|c| PidLoop::new(model, c, plant).unwrap())
+        .collect();
+    let mut x0 = [0.0; 8];
+    x0[plant.measured.phi] = 0.1;
+    (loops, x0)
+}
+
+fn pd_settings(gains: impl IntoIterator<Item = (f64, f64)>) -> Vec<ControllerSettings> {
+    gains
+        .into_iter()
+        .map(|(kp, kd)| ControllerSettings::pid(PidGains { kp, ki: 0.0, kd }))
+        .collect()
+}
+
+#[test]
+fn without_the_settled_tail_the_metric_is_the_benettin_run_bit_for_bit() {
+    let model = Vehicle8::with_defaults();
+    let settings = pd_settings(GAINS.iter().chain(&MORE).copied());
+    let (loops, x0) = pd_loops(&model, &settings);
+    let s = MetricSettings {
+        iterations: 15,
+        settle_distance: None,
+        ..MetricSettings::default()
+    };
+    for lp in &loops {
+        let ours = metric::max_lyapunov(lp, &x0, &s, 0);
+        let reference = benettin_reference(lp, &x0, &s);
+        let tag = format!("Kp {} Kd {}", reference.kp, reference.kd);
+        assert_eq!(ours.status, reference.status, "{tag}");
+        assert_eq!(ours.settled_at, None, "{tag}: no shortcut asked for");
+        assert_eq!(
+            ours.value.map(f64::to_bits),
+            reference.value.map(f64::to_bits),
+            "{tag}: {:?} vs {:?}",
+            ours.value,
+            reference.value
+        );
+    }
+}
+
+#[test]
+fn the_settled_tail_moves_lambda1_by_at_most_its_stated_tolerance() {
+    use twv_analysis::sweep::SETTLED_TAIL_TOLERANCE;
+    // The study's settings (K = 100 after the 1 s transient) on a (Kp, Kd) grid spanning the
+    // map: falls, fast and slow decays, oscillations, a slow divergence.
+    let gains = [700.0, 1333.0, 2500.0, 4000.0, 5500.0, 8000.0]
+        .into_iter()
+        .flat_map(|kp| [0.0, 300.0, 800.0, 1600.0, 2800.0, 4000.0].map(|kd| (kp, kd)));
+    let model = Vehicle8::with_defaults();
+    let settings = pd_settings(gains);
+    let (loops, x0) = pd_loops(&model, &settings);
+    let indices: Vec<usize> = (0..loops.len()).collect();
+    let run = |settle_distance| {
+        let s = MetricSettings {
+            settle_distance,
+            ..MetricSettings::default()
+        };
+        max_lyapunov_lanes(&loops, &x0, &s, &indices)
+    };
+    let full = run(None);
+    let largest_change = |with: &[PointResult]| {
+        let mut largest = 0.0_f64;
+        for (a, b) in with.iter().zip(&full) {
+            assert_eq!(a.status, b.status, "Kp {} Kd {}", b.kp, b.kd);
+            if let (Some(x), Some(y)) = (a.value, b.value) {
+                largest = largest.max((x - y).abs());
+            }
+        }
+        largest
+    };
+    let default = run(MetricSettings::default().settle_distance);
+    let settled = default.iter().filter(|p| p.settled_at.is_some()).count();
+    let ok = default.iter().filter(|p| p.status == Status::Ok).count();
+    assert!(
+        settled >= ok / 3 && settled < ok,
+        "{settled} of {ok} runs should take the settled tail (some, not all)"
+    );
+    for p in &default {
+        if let Some(t) = p.settled_at {
+            assert!(
+                t > 1.0 && t < 11.0,
+                "settled at {t} s: after the transient, before the end"
+            );
+        }
+    }
+    let change = largest_change(&default);
+    assert!(
+        change <= SETTLED_TAIL_TOLERANCE,
+        "λ1 moved by {change:e} /s with the settled tail (stated tolerance {SETTLED_TAIL_TOLERANCE:e})"
+    );
+    // The rest criterion is what holds the tolerance: calling loops at rest that still have a
+    // tenth of a radian to go breaks it.
+    let loose = largest_change(&run(Some(0.3)));
+    assert!(
+        loose > SETTLED_TAIL_TOLERANCE,
+        "a loose rest criterion should break the tolerance (moved {loose:e} /s)"
+    );
 }

@@ -81,6 +81,10 @@ pub struct SweepArgs {
     /// Recompute the shard even if its file is complete (ignores a checkpoint)
     #[arg(long)]
     pub force: bool,
+    /// max-lyapunov: step every point to the end of its horizon, without the settled tail
+    /// (a loop at rest finished from its linearisation, λ1 within 10⁻³ /s; README)
+    #[arg(long)]
+    pub full_horizon: bool,
 }
 
 impl SweepArgs {
@@ -127,7 +131,12 @@ impl SweepArgs {
                 .transpose()?,
             tilt: self.tilt,
             controller,
-            metric_settings: MetricSettings::default(),
+            metric_settings: MetricSettings {
+                settle_distance: MetricSettings::default()
+                    .settle_distance
+                    .filter(|_| !self.full_horizon),
+                ..MetricSettings::default()
+            },
         })
     }
 

@@ -12,8 +12,8 @@ use crate::control::settings::Setpoint;
 use crate::integrate::VarState;
 
 /// Eight closed loops of one model, evaluated together with one tangent vector each.
-pub struct LoopLanes<'l, 'a, M, const NX: usize, const NU: usize, const NA: usize> {
-    loops: &'l [PidLoop<'a, M, NX, NU, NA>; LANES],
+pub struct LoopLanes<'a, M, const NX: usize, const NU: usize, const NA: usize> {
+    loops: [PidLoop<'a, M, NX, NU, NA>; LANES],
     /// The laws as lane arrays, when every loop is a plain PD law of the same plant.
     pd: Option<PdLanes<NU>>,
 }
@@ -31,12 +31,24 @@ struct PdLanes<const NU: usize> {
     yaw_dir: [f64; NU],
 }
 
-impl<'l, 'a, M, const NX: usize, const NU: usize, const NA: usize> LoopLanes<'l, 'a, M, NX, NU, NA>
+impl<'a, M, const NX: usize, const NU: usize, const NA: usize> LoopLanes<'a, M, NX, NU, NA>
 where
     M: Model<NX, NU>,
 {
     /// The loops `loops`, all of the same model.
-    pub fn new(loops: &'l [PidLoop<'a, M, NX, NU, NA>; LANES]) -> Self {
+    pub fn new(loops: [PidLoop<'a, M, NX, NU, NA>; LANES]) -> Self {
+        let pd = Self::pd_lanes(&loops);
+        Self { loops, pd }
+    }
+
+    /// Lane `lane` runs `lp` from now on (a loop of the same model).
+    pub fn set(&mut self, lane: usize, lp: PidLoop<'a, M, NX, NU, NA>) {
+        self.loops[lane] = lp;
+        self.pd = Self::pd_lanes(&self.loops);
+    }
+
+    /// The lane-array PD law of `loops`, if every one is a plain PD law of the same plant.
+    fn pd_lanes(loops: &[PidLoop<'a, M, NX, NU, NA>; LANES]) -> Option<PdLanes<NU>> {
         debug_assert!(loops.iter().all(|l| core::ptr::eq(l.model, loops[0].model)));
         let plain = |l: &PidLoop<'a, M, NX, NU, NA>| {
             let s = l.settings;
@@ -45,7 +57,7 @@ where
                 && s.yaw.is_none()
                 && l.plant == loops[0].plant
         };
-        let pd = loops.iter().all(plain).then(|| {
+        loops.iter().all(plain).then(|| {
             let plant = &loops[0].plant;
             let gains = loops.map(|l| l.settings.pitch.gains);
             PdLanes {
@@ -57,14 +69,18 @@ where
                 force_dir: plant.inputs.force,
                 yaw_dir: plant.inputs.yaw.unwrap_or([0.0; NU]),
             }
-        });
-        Self { loops, pd }
+        })
     }
 
     /// [`VectorField::eval`](crate::integrate::VectorField::eval) with one tangent vector for
-    /// every loop at once (loop `l` at `y[l]` → `dy[l]`, no trace).
+    /// every loop at once (loop `l` at time `t[l]` and `y[l]` → `dy[l]`, no trace).
     #[inline(always)]
-    pub fn eval(&self, t: f64, y: &[VarState<NA, 1>; LANES], dy: &mut [VarState<NA, 1>; LANES]) {
+    pub fn eval(
+        &self,
+        t: &[f64; LANES],
+        y: &[VarState<NA, 1>; LANES],
+        dy: &mut [VarState<NA, 1>; LANES],
+    ) {
         let setpoints = self.setpoints(y);
         let mut u = [[0.0; NU]; LANES];
         let mut zdot = [[0.0; 3]; LANES];
@@ -78,16 +94,19 @@ where
                 for (l, (lp, y)) in self.loops.iter().zip(y).enumerate() {
                     // Reduced at once to what is needed later: copying eight whole laws (their
                     // gradient rows) costs more than the model itself.
-                    let law = lp.law_at::<true>(t, &y.x, setpoints[l]);
+                    let law = lp.law_at::<true>(t[l], &y.x, setpoints[l]);
                     u[l] = law.cmd.u;
                     zdot[l] = law.zdot;
                     tangent[l] = lp.tangent(&law, &y.w[0]);
                 }
             }
         }
-        let x: [[f64; NX]; LANES] = core::array::from_fn(|l| core::array::from_fn(|i| y[l].x[i]));
-        let w: [[f64; NX]; LANES] =
-            core::array::from_fn(|l| core::array::from_fn(|i| y[l].w[0][i]));
+        // Filled in place: built by `array::from_fn`, each was assembled aside and then copied.
+        let (mut x, mut w) = ([[0.0; NX]; LANES], [[0.0; NX]; LANES]);
+        for l in 0..LANES {
+            x[l].copy_from_slice(&y[l].x[..NX]);
+            w[l].copy_from_slice(&y[l].w[0][..NX]);
+        }
         let (mut fx, mut jwx) = ([[0.0; NX]; LANES], [[0.0; NX]; LANES]);
         let mut b = [[[0.0; NU]; NX]; LANES];
         self.loops[0]
@@ -107,7 +126,9 @@ where
     /// eight from one lane-wise sincos (the same bits) when any loop's setpoint needs one.
     #[inline(always)]
     fn setpoints(&self, y: &[VarState<NA, 1>; LANES]) -> [(f64, f64); LANES] {
-        let phi = y.map(|y| y.x[self.loops[0].plant.measured.phi]);
+        let phi_at = self.loops[0].plant.measured.phi;
+        // Not `y.map`: that copies the eight whole states first.
+        let phi: Lanes = core::array::from_fn(|l| y[l].x[phi_at]);
         let sine = |l: &PidLoop<'a, M, NX, NU, NA>| {
             matches!(l.settings.pitch.setpoint, Setpoint::Sine { .. })
         };
