@@ -24,6 +24,10 @@ pub struct Rk4<F, const N: usize, const K: usize> {
     steps: u64,
     y: VarState<N, K>,
     scratch: Rk4Scratch<N, K, 1>,
+    /// Which build of the steps `advance_to` runs (timed on its first calls; the builds exist
+    /// in release builds only).
+    #[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
+    calibration: twv_kernels::isa::Calibration,
 }
 
 impl<F: VectorField<N>, const N: usize, const K: usize> Rk4<F, N, K> {
@@ -52,6 +56,8 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Rk4<F, N, K> {
             steps: 0,
             y,
             scratch: Rk4Scratch::ZERO,
+            #[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
+            calibration: twv_kernels::isa::Calibration::NEW,
         })
     }
 
@@ -222,16 +228,25 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Stepper<N, K> for Rk4<F,
     fn advance_to(&mut self, t_end: f64) -> Result<(), IntegrateError> {
         #[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
         {
-            if twv_kernels::isa::avx512() {
-                // SAFETY: `avx512()` is true only when the CPU and the OS support AVX-512F and
-                // AVX-512VL.
-                return unsafe { self.advance_to_avx512(t_end) };
+            use twv_kernels::isa::Isa;
+            let (isa, timed) = self.calibration.next();
+            let (start, steps) = (timed.then(std::time::Instant::now), self.steps);
+            let done = match isa {
+                // SAFETY: `Calibration::next` offers AVX-512 only when `isa::current()` is
+                // AVX-512, i.e. the CPU and the OS support AVX-512F and AVX-512VL.
+                Isa::Avx512 => unsafe { self.advance_to_avx512(t_end) },
+                // SAFETY: offered only when `isa::current()` is at least AVX2.
+                Isa::Avx2 => unsafe { self.advance_to_avx2(t_end) },
+                Isa::Baseline => self.advance_to_inline(t_end),
+            };
+            if let Some(start) = start {
+                let steps = (self.steps - steps).max(1) as f64;
+                self.calibration
+                    .record(isa, start.elapsed().as_secs_f64() / steps);
             }
-            if twv_kernels::isa::avx2() {
-                // SAFETY: `avx2()` is true only when the CPU and the OS support AVX2.
-                return unsafe { self.advance_to_avx2(t_end) };
-            }
+            done
         }
+        #[cfg(not(all(target_arch = "x86_64", not(debug_assertions))))]
         self.advance_to_inline(t_end)
     }
 
