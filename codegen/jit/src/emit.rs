@@ -39,7 +39,7 @@ pub fn values(
     function: &Function,
     args: [Value; 3],
     sinks: &Sinks,
-) {
+) -> Vec<Value> {
     let mut values: Vec<Value> = Vec::with_capacity(function.n_values());
     for (instr, sinks) in function.instructions().iter().zip(sinks) {
         let value = match *instr {
@@ -56,6 +56,7 @@ pub fn values(
         }
         values.push(value);
     }
+    values
 }
 
 /// Adds sinks that store every value an output of `function` reads at `work[id]`.
@@ -133,12 +134,11 @@ pub fn load(b: &mut FunctionBuilder<'_>, base: Value, index: usize) -> Value {
 }
 
 /// tr(∂f/∂x) as the generated code sums it: 0.0, then each stored diagonal entry in order
-/// (read back from `entries`, the stored entries of `jac` in order).
-pub fn trace(b: &mut FunctionBuilder<'_>, entries: Value, jac: &Output) -> Value {
+/// (`entries`: the stored entries of `jac`, in order).
+pub fn trace(b: &mut FunctionBuilder<'_>, entries: &[Value], jac: &Output) -> Value {
     let mut sum = b.ins().f64const(0.0);
-    for (e, (r, c, _)) in jac.entries().enumerate() {
+    for ((r, c, _), &entry) in jac.entries().zip(entries) {
         if r == c {
-            let entry = load(b, entries, e);
             sum = b.ins().fadd(sum, entry);
         }
     }
@@ -202,6 +202,37 @@ pub fn jw_loop(
 
     b.switch_to_block(exit);
     b.seal_block(exit);
+}
+
+/// J·W for exactly `count` tangent vectors, written out from the Jacobian's stored entries as
+/// values (`entries`, in order), for each vector the products of [`jw_loop`] in its order (the
+/// same bits): no loop, no address arithmetic, no trip through memory.
+pub fn jw_unrolled(
+    b: &mut FunctionBuilder<'_>,
+    entries: &[Value],
+    columns: &[(usize, Vec<Option<usize>>)],
+    nx: usize,
+    (w, count, out): (Value, usize, Value),
+) {
+    let zero = b.ins().f64const(0.0);
+    for k in 0..count {
+        let mut slots = vec![zero; nx];
+        for (n, (c, column)) in columns.iter().enumerate() {
+            let wc = b.ins().load(types::F64, MEMORY, w, offset(k * nx + c));
+            for (slot, e) in slots.iter_mut().zip(column) {
+                let j = e.map_or(zero, |e| entries[e]);
+                let term = b.ins().fmul(j, wc);
+                *slot = if n == 0 {
+                    term
+                } else {
+                    b.ins().fadd(*slot, term)
+                };
+            }
+        }
+        for (r, value) in slots.into_iter().enumerate() {
+            b.ins().store(MEMORY, value, out, offset(k * nx + r));
+        }
+    }
 }
 
 fn unary(b: &mut FunctionBuilder<'_>, helper: FuncRef, op: UnaryOp, a: Value) -> Value {

@@ -130,9 +130,19 @@ pub struct JitCode {
     functions: Vec<FunctionCode>,
     /// The indices of `f`, `jac_x` and `jac_u`, looked up at every step.
     hot: [Option<usize>; 3],
-    /// `f_jac_x` as ẋ, J·W and the trace.
+    /// `f_jac_x` as ẋ, J·W (a loop over any number of tangent vectors) and the trace.
     f_jw: Lazy<FJw>,
+    /// The same with J·W written out for exactly k tangent vectors (index k ≤
+    /// [`MAX_UNROLLED`]), for functions of at most [`SINGLE_PASS_ABOVE`] instructions.
+    f_jw_unrolled: [Lazy<FJw>; MAX_UNROLLED + 1],
+    /// Whether `f_jac_x` is small enough to be written out per count.
+    unroll: bool,
 }
+
+/// The largest number of tangent vectors J·W is written out for (one routine per count, made
+/// on first use): the loop's bookkeeping and the re-reading of the Jacobian's entries for
+/// every vector are gone, which is what small models (Lorenz: 3 × 3) spend most on.
+const MAX_UNROLLED: usize = 16;
 
 impl fmt::Debug for JitCode {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -181,6 +191,8 @@ enum Shape<'a> {
         f: &'a twv_ir::Output,
         jac: &'a twv_ir::Output,
         columns: &'a [(usize, Vec<Option<usize>>)],
+        /// `Some(k)`: J·W written out for exactly k tangent vectors; `None`: a loop.
+        unrolled: Option<usize>,
     },
 }
 
@@ -302,17 +314,46 @@ impl Builder {
                 emit::values(&mut b, &helpers, function, args, &sinks);
                 b.ins().return_(&[]);
             }
-            Shape::FJw { f, jac, columns } => {
+            Shape::FJw {
+                f,
+                jac,
+                columns,
+                unrolled,
+            } => {
                 let [w, count, f_out, out] = [3, 4, 5, 6].map(|i| params[i]);
-                // The Jacobian's stored entries go to a stack array, ẋ to its output.
-                let pointer = self.module.target_config().pointer_type();
-                let entries = emit::entry_sinks(&mut b, &mut sinks, jac, pointer);
                 let one = b.ins().iconst(types::I64, 1);
                 let rows = emit::row_pointers(&mut b, f_out, one, f.rows);
                 emit::dense_sinks(&mut b, &mut sinks, f, &rows);
-                emit::values(&mut b, &helpers, function, args, &sinks);
-                let trace = emit::trace(&mut b, entries, jac);
-                emit::jw_loop(&mut b, entries, columns, nx, (w, count, out));
+                let trace = match unrolled {
+                    // A small function: the Jacobian's entries stay values.
+                    Some(k) => {
+                        let values = emit::values(&mut b, &helpers, function, args, &sinks);
+                        let entries: Vec<_> = jac.values.iter().map(|&v| values[v]).collect();
+                        emit::jw_unrolled(&mut b, &entries, columns, nx, (w, k, out));
+                        emit::trace(&mut b, &entries, jac)
+                    }
+                    // Any size: they go to a stack array as soon as they exist, and the loop
+                    // reads them back.
+                    None => {
+                        let pointer = self.module.target_config().pointer_type();
+                        let array = emit::entry_sinks(&mut b, &mut sinks, jac, pointer);
+                        emit::values(&mut b, &helpers, function, args, &sinks);
+                        // Only the diagonal is read back for the trace.
+                        let unused = b.ins().f64const(0.0);
+                        let entries: Vec<_> = (jac.entries().enumerate())
+                            .map(|(e, (r, c, _))| {
+                                if r == c {
+                                    emit::load(&mut b, array, e)
+                                } else {
+                                    unused
+                                }
+                            })
+                            .collect();
+                        let trace = emit::trace(&mut b, &entries, jac);
+                        emit::jw_loop(&mut b, array, columns, nx, (w, count, out));
+                        trace
+                    }
+                };
                 b.ins().return_(&[trace]);
             }
         }
@@ -347,6 +388,10 @@ impl JitCode {
                 .collect(),
             hot: ["f", "jac_x", "jac_u"].map(|name| ir.functions().keys().position(|n| n == name)),
             f_jw: OnceLock::new(),
+            f_jw_unrolled: std::array::from_fn(|_| OnceLock::new()),
+            unroll: ir
+                .function("f_jac_x")
+                .is_some_and(|f| f.n_values() <= SINGLE_PASS_ABOVE),
         })
     }
 
@@ -403,22 +448,35 @@ impl JitCode {
         compiled.as_ref().map(|c| &c.routine)
     }
 
-    fn f_jw_routine(&self) -> Option<&Routine<FJw>> {
-        let compiled = self.f_jw.get_or_init(|| {
-            let f = self
-                .ir
-                .output("f_jac_x", "f")
-                .filter(|f| self.is_state_column(f))?;
-            let jac = self.ir.output("f_jac_x", "jac_x")?;
-            let columns = jac.stored_columns();
-            let shape = Shape::FJw {
-                f,
-                jac,
-                columns: &columns,
-            };
-            self.compile("f_jac_x", shape, as_f_jw)
-        });
-        compiled.as_ref().map(|c| &c.routine)
+    /// The `f_jac_x` routine for `count` tangent vectors: written out for that count where
+    /// [`MAX_UNROLLED`] allows and the function is small, else the loop.
+    fn f_jw_routine(&self, count: usize) -> Option<&Routine<FJw>> {
+        let unrolled = self
+            .f_jw_unrolled
+            .get(count)
+            .filter(|_| self.unroll)
+            .and_then(|lazy| lazy.get_or_init(|| self.compile_f_jw(Some(count))).as_ref());
+        let compiled = match unrolled {
+            Some(c) => Some(c),
+            None => self.f_jw.get_or_init(|| self.compile_f_jw(None)).as_ref(),
+        };
+        compiled.map(|c| &c.routine)
+    }
+
+    fn compile_f_jw(&self, unrolled: Option<usize>) -> Option<Compiled<FJw>> {
+        let f = self
+            .ir
+            .output("f_jac_x", "f")
+            .filter(|f| self.is_state_column(f))?;
+        let jac = self.ir.output("f_jac_x", "jac_x")?;
+        let columns = jac.stored_columns();
+        let shape = Shape::FJw {
+            f,
+            jac,
+            columns: &columns,
+            unrolled,
+        };
+        self.compile("f_jac_x", shape, as_f_jw)
     }
 }
 
@@ -494,7 +552,7 @@ impl NativeCode for JitCode {
         f: &mut [f64],
         out: &mut [f64],
     ) -> Option<f64> {
-        let routine = self.f_jw_routine()?;
+        let routine = self.f_jw_routine(count)?;
         let nx = self.ir.nx();
         let fits = w.len() == count * nx && out.len() == w.len() && f.len() >= nx;
         if !routine.reads_within(x, u, p) || !fits {

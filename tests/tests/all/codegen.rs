@@ -22,14 +22,16 @@ fn vehicle_params(ir: &Ir, file: &str) -> Vec<f64> {
         .expect("shipped vehicle file is valid")
 }
 
-fn random_point<const NX: usize, const NU: usize>(rng: &mut ChaCha8Rng) -> ([f64; NX], [f64; NU]) {
+pub(crate) fn random_point<const NX: usize, const NU: usize>(
+    rng: &mut ChaCha8Rng,
+) -> ([f64; NX], [f64; NU]) {
     (
         std::array::from_fn(|_| rng.gen_range(-2.0..2.0)),
         std::array::from_fn(|_| rng.gen_range(-50.0..50.0)),
     )
 }
 
-fn random_w<const NX: usize, const K: usize>(rng: &mut ChaCha8Rng) -> [[f64; NX]; K] {
+pub(crate) fn random_w<const NX: usize, const K: usize>(rng: &mut ChaCha8Rng) -> [[f64; NX]; K] {
     std::array::from_fn(|_| std::array::from_fn(|_| rng.gen_range(-1.0..1.0)))
 }
 

@@ -6,9 +6,10 @@
 use std::sync::Arc;
 
 use twv_ir::{Interpreted, ModelError, NativeCode};
+use twv_model::Model;
 
 use crate::codegen::all_operations::{fixture, same_operations, NX as ALL_OPS_NX};
-use crate::codegen::{same_mechanics, same_model, shipped_ir};
+use crate::codegen::{random_point, random_w, same_mechanics, same_model, shipped_ir};
 
 /// The JIT-compiled and the interpreted model of shipped model `name` (its IR defaults).
 fn pair<const NX: usize, const NU: usize>(
@@ -21,6 +22,46 @@ fn pair<const NX: usize, const NU: usize>(
     let interpreted = Interpreted::new(&ir, &ir.defaults()).unwrap();
     assert!(jit.is_native() && !interpreted.is_native());
     (jit, interpreted)
+}
+
+/// f + J·W of `a` and `b` for `K` tangent vectors at random points, bit for bit.
+fn same_jw<const NX: usize, const NU: usize, const K: usize>(
+    a: &Interpreted<NX, NU>,
+    b: &Interpreted<NX, NU>,
+    what: &str,
+) {
+    use rand::SeedableRng;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(K as u64);
+    for _ in 0..50 {
+        let (x, u) = random_point::<NX, NU>(&mut rng);
+        let w = random_w::<NX, K>(&mut rng);
+        let (mut fa, mut fb, mut oa, mut ob) =
+            ([0.0; NX], [0.0; NX], [[0.0; NX]; K], [[0.0; NX]; K]);
+        let ta = a.f_jw_trace(&x, &u, &w, &mut fa, &mut oa);
+        let tb = b.f_jw_trace(&x, &u, &w, &mut fb, &mut ob);
+        let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&fa), bits(&fb), "{what} K = {K}: f");
+        assert_eq!(
+            bits(oa.as_flattened()),
+            bits(ob.as_flattened()),
+            "{what} K = {K}: J·W"
+        );
+        assert_eq!(ta.to_bits(), tb.to_bits(), "{what} K = {K}: trace");
+    }
+}
+
+/// The JIT writes J·W out for each count up to 16 and loops beyond: both against the
+/// interpreter, for a small model (Lorenz) and a vehicle.
+#[test]
+fn written_out_and_looped_jw_have_the_interpreter_bits() {
+    let (a, b) = pair::<3, 0>("lorenz");
+    same_jw::<3, 0, 1>(&a, &b, "lorenz");
+    same_jw::<3, 0, 16>(&a, &b, "lorenz");
+    same_jw::<3, 0, 17>(&a, &b, "lorenz");
+    let (a, b) = pair::<8, 2>("vehicle8");
+    same_jw::<8, 2, 1>(&a, &b, "vehicle8");
+    same_jw::<8, 2, 8>(&a, &b, "vehicle8");
+    same_jw::<8, 2, 20>(&a, &b, "vehicle8");
 }
 
 #[test]
