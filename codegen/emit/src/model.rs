@@ -387,11 +387,11 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
     let body = |module: TokenStream| {
         quote! {
             use #module as wide;
-            let xs = ::twv_kernels::lanes::gather(x_lanes);
-            let us = ::twv_kernels::lanes::gather(u_lanes);
+            let xs = wide::gather(x_lanes);
+            let us = wide::gather(u_lanes);
             #fj_body
             ::twv_kernels::lanes::scatter(&#fj_f, f_lanes);
-            let wl = ::twv_kernels::lanes::gather(w_lanes);
+            let wl = wide::gather(w_lanes);
             ::twv_kernels::lanes::scatter(&#jw, out_lanes);
             {
                 #ju_body

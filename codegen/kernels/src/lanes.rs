@@ -182,6 +182,26 @@ pub mod wide {
     op!(mul, _mm512_mul_pd);
     op!(div, _mm512_div_pd);
 
+    /// [`super::gather`] writing each lane array with one 8-wide store (see
+    /// [`super::wide_avx2::gather`] for why).
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F and AVX-512VL.
+    #[target_feature(enable = "avx512f,avx512vl")]
+    #[inline]
+    pub fn gather<const N: usize>(rows: &[[f64; N]; LANES]) -> [Lanes; N] {
+        let mut out = [[0.0; LANES]; N];
+        for (i, lanes) in out.iter_mut().enumerate() {
+            let v = _mm512_set_pd(
+                rows[7][i], rows[6][i], rows[5][i], rows[4][i], rows[3][i], rows[2][i], rows[1][i],
+                rows[0][i],
+            );
+            // SAFETY: an unaligned store of 8 doubles into an array of 8.
+            unsafe { _mm512_storeu_pd(lanes.as_mut_ptr(), v) };
+        }
+        out
+    }
+
     /// (sin, cos) of every lane with the bits of [`crate::trig::sin_cos`], all lanes in one
     /// instruction stream: every lane takes every path (the three rounds of the reduction, both
     /// forms of fdlibm's sine kernel) and keeps the one its scalar call would take, by masks.
@@ -331,6 +351,28 @@ pub mod wide_avx2 {
     op!(mul, _mm256_mul_pd);
     op!(div, _mm256_div_pd);
 
+    /// [`super::gather`] writing each half of a lane array with one 4-wide store: the
+    /// operations read lane arrays with 4-wide loads, and a wide load of data just written one
+    /// double at a time cannot be forwarded from the store buffer — it waits for the stores to
+    /// reach the cache (in the AVX2 map a third of the 8-wide sincos's time sat on its input's
+    /// load).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub fn gather<const N: usize>(rows: &[[f64; N]; LANES]) -> [Lanes; N] {
+        let mut out = [[0.0; LANES]; N];
+        for (i, lanes) in out.iter_mut().enumerate() {
+            for h in [0, HALF] {
+                let v = _mm256_set_pd(rows[h + 3][i], rows[h + 2][i], rows[h + 1][i], rows[h][i]);
+                // SAFETY: an unaligned store of 4 doubles at offset 0 or 4 of an array of 8.
+                unsafe { _mm256_storeu_pd(lanes.as_mut_ptr().add(h), v) };
+            }
+        }
+        out
+    }
+
     /// `m ? b : a` per lane, `m` all-ones or zero per lane.
     #[target_feature(enable = "avx2")]
     #[inline]
@@ -357,13 +399,18 @@ pub mod wide_avx2 {
     #[target_feature(enable = "avx2")]
     #[inline]
     pub fn sin_cos(x: Lanes) -> (Lanes, Lanes) {
-        // SAFETY: unaligned loads of 4 doubles at offsets 0 and 4 of an array of 8.
-        let halves = unsafe {
-            [
-                _mm256_loadu_pd(x.as_ptr()),
-                _mm256_loadu_pd(x.as_ptr().add(HALF)),
-            ]
+        // Read one double at a time: callers often have just written `x` one double at a time
+        // (the loops' Φ), and a wide load of narrower fresh stores cannot be forwarded from the
+        // store buffer (a quarter of this function's time). Volatile, or LLVM merges the reads
+        // back into one wide load.
+        let at = |l: usize| {
+            // SAFETY: `l` < LANES, a read of an element of `x`.
+            unsafe { core::ptr::read_volatile(x.as_ptr().add(l)) }
         };
+        let halves = [
+            _mm256_set_pd(at(3), at(2), at(1), at(0)),
+            _mm256_set_pd(at(7), at(6), at(5), at(4)),
+        ];
         let limit = _mm256_set1_epi64x(i64::from(crate::trig::MEDIUM_HIGH) - 1);
         let far = _mm256_or_si256(
             _mm256_cmpgt_epi64(high_word(halves[0]), limit),
