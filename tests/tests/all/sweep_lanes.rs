@@ -49,6 +49,23 @@ const MORE: [(f64, f64); 6] = [
     (3333.0, 833.0),
 ];
 
+/// `a` and `b` are the same point, bit for bit (value, status, rest time).
+#[track_caller]
+fn same_point(a: &PointResult, b: &PointResult, what: &str) {
+    let tag = format!("{what}, point {} (Kp {}, Kd {})", b.index, b.kp, b.kd);
+    assert_eq!(a.index, b.index, "{tag}");
+    assert_eq!((a.kp, a.ki, a.kd), (b.kp, b.ki, b.kd), "{tag}");
+    assert_eq!(a.status, b.status, "{tag}");
+    assert_eq!(a.settled_at, b.settled_at, "{tag}");
+    assert_eq!(
+        a.value.map(f64::to_bits),
+        b.value.map(f64::to_bits),
+        "{tag}: {:?} vs {:?}",
+        a.value,
+        b.value
+    );
+}
+
 /// Runs both paths for `base` with the gains above (plus `ki`), compares every point; returns
 /// the points.
 fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> Vec<PointResult> {
@@ -86,18 +103,7 @@ fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> V
         let lanes = max_lyapunov_lanes(&loops, &x0, &s, &indices);
         assert_eq!(lanes.len(), one.len(), "{what}: one result per point");
         for (a, b) in lanes.iter().zip(&one) {
-            let tag = format!("{what} ({} kernel) point {}", used.name(), b.index);
-            assert_eq!(a.index, b.index, "{tag}");
-            assert_eq!((a.kp, a.ki, a.kd), (b.kp, b.ki, b.kd), "{tag}");
-            assert_eq!(a.status, b.status, "{tag}");
-            assert_eq!(a.settled_at, b.settled_at, "{tag}");
-            assert_eq!(
-                a.value.map(f64::to_bits),
-                b.value.map(f64::to_bits),
-                "{tag}: {:?} vs {:?}",
-                a.value,
-                b.value
-            );
+            same_point(a, b, &format!("{what} ({} kernel)", used.name()));
         }
     }
     force(Isa::Avx512);
@@ -266,16 +272,7 @@ fn without_the_settled_tail_the_metric_is_the_benettin_run_bit_for_bit() {
     for lp in &loops {
         let ours = metric::max_lyapunov(lp, &x0, &s, 0);
         let reference = benettin_reference(lp, &x0, &s);
-        let tag = format!("Kp {} Kd {}", reference.kp, reference.kd);
-        assert_eq!(ours.status, reference.status, "{tag}");
-        assert_eq!(ours.settled_at, None, "{tag}: no shortcut asked for");
-        assert_eq!(
-            ours.value.map(f64::to_bits),
-            reference.value.map(f64::to_bits),
-            "{tag}: {:?} vs {:?}",
-            ours.value,
-            reference.value
-        );
+        same_point(&ours, &reference, "the metric against the Benettin run");
     }
 }
 
