@@ -11,7 +11,9 @@ use crate::progress::{Progress, Silent};
 use super::classify::{classify, SignRule};
 use super::result::{LyapunovResult, RunDetails, RunningEstimates};
 use super::stats::{kaplan_yorke, stderr_of_batch_means};
-use super::{initial_basis, orthonormalize, IntegratorChoice, LyapunovError, LyapunovSettings};
+use super::{
+    initial_basis, orthonormalize, IntegratorChoice, IntervalEnds, LyapunovError, LyapunovSettings,
+};
 
 /// The most rows of running estimates a run keeps: longer runs record every ⌈K / this⌉-th
 /// interval (and always the last), so memory stays bounded however many intervals are asked
@@ -87,9 +89,13 @@ where
     let trace = settings.trace_check && stepper.integrates_trace();
 
     // Transient: evolve state and basis, re-orthonormalise, forget the growth.
-    let t_begin = stepper.t();
-    let n_transient = (settings.transient / t_sample * (1.0 - 1e-12)).ceil() as usize;
-    progress.start((n_transient + settings.iterations) as u64, "intervals");
+    let ends = IntervalEnds::new(
+        stepper.t(),
+        settings.transient,
+        t_sample,
+        settings.iterations,
+    );
+    progress.start(ends.intervals as u64, "intervals");
     let interval_done = || {
         progress.advance(1);
         if progress.cancelled() {
@@ -98,13 +104,8 @@ where
             Ok(())
         }
     };
-    for i in 1..=n_transient {
-        let t_end = if i == n_transient {
-            t_begin + settings.transient
-        } else {
-            t_begin + i as f64 * t_sample
-        };
-        stepper.advance_to(t_end)?;
+    for i in 1..=ends.n_transient {
+        stepper.advance_to(ends.end(i))?;
         reorthonormalize(&mut stepper)?;
         interval_done()?;
     }
@@ -121,8 +122,7 @@ where
     let mut f = [0.0; N];
     for i in 1..=settings.iterations {
         let t_prev = stepper.t();
-        // From t0 (not accumulated) so the horizon is exactly n·T.
-        stepper.advance_to(t0 + i as f64 * t_sample)?;
+        stepper.advance_to(ends.end(ends.n_transient + i))?;
         let r = reorthonormalize(&mut stepper)?;
         let (t, y) = (stepper.t(), stepper.state());
         stepper.field().rhs(t, &y.x, &mut f);
@@ -134,7 +134,7 @@ where
     let t_total = stepper.t() - t0;
     let y = stepper.state();
     let details = RunDetails {
-        t_transient: t0 - t_begin,
+        t_transient: t0 - ends.t_begin,
         t_sample,
         intervals: settings.iterations,
         steps: stepper.steps(),

@@ -25,6 +25,7 @@ mod basis;
 mod benettin;
 mod classify;
 mod error;
+mod intervals;
 mod qr;
 mod result;
 mod settings;
@@ -39,6 +40,7 @@ pub use classify::{
     classify, verdict, Classification, ExponentSign, SignDecision, SignRule, SignTest,
 };
 pub use error::{LyapunovError, SettingsError};
+pub(crate) use intervals::IntervalEnds;
 pub use qr::orthonormalize;
 pub use result::{LyapunovResult, RunDetails, RunningEstimates};
 pub use settings::{InitialBasis, IntegratorChoice, LyapunovSettings};

@@ -23,7 +23,7 @@ use crate::control::{loop_states, LoopLanes, PidLoop};
 use crate::integrate::{
     equal_steps, eval_stage, project, rk4_step_each, Projected, Rk4Scratch, VarState,
 };
-use crate::lyapunov::{initial_basis, orthonormalize, InitialBasis};
+use crate::lyapunov::{initial_basis, orthonormalize, InitialBasis, IntervalEnds};
 
 /// λ1 of the closed loops `loops` (the grid points `indices`) from the model state `x0`, in
 /// that order: exactly what [`max_lyapunov`] gives for each, eight at a time (fewer than eight
@@ -111,43 +111,6 @@ where
     }
 }
 
-/// The interval ends of `lyapunov_spectrum_with`: the transient's, then the measured ones
-/// counted from its end, each reached in equal steps of about h.
-struct Schedule {
-    n_transient: usize,
-    transient: f64,
-    t_sample: f64,
-    intervals: usize,
-}
-
-impl Schedule {
-    fn new(s: &MetricSettings) -> Self {
-        let n_transient = (s.transient / s.t_sample * (1.0 - 1e-12)).ceil() as usize;
-        Self {
-            n_transient,
-            transient: s.transient,
-            t_sample: s.t_sample,
-            intervals: n_transient + s.iterations,
-        }
-    }
-
-    /// The end of interval `i` (1-based).
-    fn end(&self, i: usize) -> f64 {
-        if i > self.n_transient {
-            self.transient + (i - self.n_transient) as f64 * self.t_sample
-        } else if i == self.n_transient {
-            self.transient
-        } else {
-            i as f64 * self.t_sample
-        }
-    }
-
-    /// The averaging horizon (the measured intervals).
-    fn horizon(&self) -> f64 {
-        self.end(self.intervals) - self.transient
-    }
-}
-
 /// How a point's run ended: its status, λ1 and when it came to rest.
 struct End {
     status: Status,
@@ -189,7 +152,7 @@ impl<const NA: usize> Run<NA> {
         lp: &PidLoop<'_, M, NX, NU, NA>,
         x0: &[f64; NX],
         s: &MetricSettings,
-        schedule: &Schedule,
+        ends: &IntervalEnds,
         point: usize,
     ) -> Result<Self, Status>
     where
@@ -213,13 +176,13 @@ impl<const NA: usize> Run<NA> {
             t: 0.0,
             log_sum: 0.0,
         };
-        run.next_interval(s, schedule);
+        run.next_interval(s, ends);
         Ok(run)
     }
 
-    fn next_interval(&mut self, s: &MetricSettings, schedule: &Schedule) {
+    fn next_interval(&mut self, s: &MetricSettings, ends: &IntervalEnds) {
         self.interval += 1;
-        self.t_stop = schedule.end(self.interval);
+        self.t_stop = ends.end(self.interval);
         (self.steps_left, self.h) = equal_steps(self.t_stop - self.t, s.h);
     }
 
@@ -231,7 +194,7 @@ impl<const NA: usize> Run<NA> {
         finite: bool,
         lp: &PidLoop<'_, M, NX, NU, NA>,
         s: &MetricSettings,
-        schedule: &Schedule,
+        ends: &IntervalEnds,
     ) -> Option<End>
     where
         M: Model<NX, NU>,
@@ -248,7 +211,7 @@ impl<const NA: usize> Run<NA> {
             return None;
         }
         self.t = self.t_stop;
-        self.interval_end(y, lp, s, schedule)
+        self.interval_end(y, lp, s, ends)
     }
 
     /// Re-orthonormalises at an interval end, adds a measured interval's growth, and ends the
@@ -259,7 +222,7 @@ impl<const NA: usize> Run<NA> {
         y: &mut VarState<NA, 1>,
         lp: &PidLoop<'_, M, NX, NU, NA>,
         s: &MetricSettings,
-        schedule: &Schedule,
+        ends: &IntervalEnds,
     ) -> Option<End>
     where
         M: Model<NX, NU>,
@@ -268,21 +231,22 @@ impl<const NA: usize> Run<NA> {
         if !(r.is_finite() && r > 0.0) {
             return Some(End::without_value(Status::Failed));
         }
-        if self.interval > schedule.n_transient {
-            self.log_sum += r.ln();
+        if ends.measured(self.interval) {
+            let growth = r.ln();
+            self.log_sum += growth;
             let done = |log_sum: f64, settled_at| End {
                 status: Status::Ok,
-                value: Some(log_sum / schedule.horizon()),
+                value: Some(log_sum / ends.horizon()),
                 settled_at,
             };
-            if self.interval == schedule.intervals {
+            if self.interval == ends.intervals {
                 return Some(done(self.log_sum, None));
             }
-            if let Some(tail) = self.settled_tail(y, lp, s, schedule, r.ln() / s.t_sample) {
+            if let Some(tail) = self.settled_tail(y, lp, s, ends, growth / s.t_sample) {
                 return Some(done(self.log_sum + tail, Some(self.t)));
             }
         }
-        self.next_interval(s, schedule);
+        self.next_interval(s, ends);
         None
     }
 
@@ -293,7 +257,7 @@ impl<const NA: usize> Run<NA> {
         y: &VarState<NA, 1>,
         lp: &PidLoop<'_, M, NX, NU, NA>,
         s: &MetricSettings,
-        schedule: &Schedule,
+        ends: &IntervalEnds,
         rate: f64,
     ) -> Option<f64>
     where
@@ -304,11 +268,11 @@ impl<const NA: usize> Run<NA> {
             field: lp,
             keep: self.keep,
         };
-        if !at_rest(&field, self.t, &y.x, &self.keep, rate, distance) {
+        if !at_rest(&field, self.t, &y.x, rate, distance) {
             return None;
         }
-        let steps = (self.interval + 1..=schedule.intervals)
-            .map(|i| equal_steps(schedule.end(i) - schedule.end(i - 1), s.h).0)
+        let steps = (self.interval + 1..=ends.intervals)
+            .map(|i| equal_steps(ends.end(i) - ends.end(i - 1), s.h).0)
             .sum();
         let h = equal_steps(s.t_sample, s.h).1;
         tail_log_growth(&field, self.t, &y.x, &y.w[0], h, steps)
@@ -328,7 +292,7 @@ where
     G: LoopGroup<'a, M, NX, NU, NA, L>,
     M: Model<NX, NU>,
 {
-    let schedule = Schedule::new(s);
+    let ends = IntervalEnds::new(0.0, s.transient, s.t_sample, s.iterations);
     let mut results: Vec<Option<PointResult>> = vec![None; loops.len()];
     let finish = |results: &mut Vec<Option<PointResult>>, point: usize, end: End| {
         let g = loops[point].settings().pitch.gains;
@@ -338,8 +302,8 @@ where
     };
     let mut runs: [Option<Run<NA>>; L] = [None; L];
     let mut y = [VarState::<NA, 1>::ZERO; L];
+    // What an idle lane is reset to after every step: the start of the last point it ran.
     let mut parked = [VarState::<NA, 1>::ZERO; L];
-    let mut keep = [[true; NA]; L];
     let mut scratch = Rk4Scratch::<NA, 1, L>::ZERO;
     let mut next = 0;
     loop {
@@ -348,10 +312,10 @@ where
             while runs[l].is_none() && next < loops.len() {
                 let point = next;
                 next += 1;
-                match Run::start(&loops[point], x0, s, &schedule, point) {
+                match Run::start(&loops[point], x0, s, &ends, point) {
                     Ok(run) => {
                         group.set(l, loops[point]);
-                        (y[l], parked[l], keep[l]) = (run.start, run.start, run.keep);
+                        (y[l], parked[l]) = (run.start, run.start);
                         runs[l] = Some(run);
                     }
                     Err(status) => finish(&mut results, point, End::without_value(status)),
@@ -365,8 +329,10 @@ where
         let h: [f64; L] = core::array::from_fn(|l| runs[l].as_ref().map_or(s.h, |r| r.h));
         let finite = rk4_step_each(&t, &h, &mut y, &mut scratch, |t, y, dy| {
             group.eval(t, y, dy);
-            for (d, k) in dy.iter_mut().zip(&keep) {
-                project(k, &mut d.w[0]);
+            for (d, run) in dy.iter_mut().zip(&runs) {
+                if let Some(run) = run {
+                    project(&run.keep, &mut d.w[0]);
+                }
             }
         });
         for l in 0..L {
@@ -375,7 +341,7 @@ where
                 continue;
             };
             let point = run.point;
-            if let Some(end) = run.after_step(&mut y[l], finite[l], &loops[point], s, &schedule) {
+            if let Some(end) = run.after_step(&mut y[l], finite[l], &loops[point], s, &ends) {
                 finish(&mut results, point, end);
                 runs[l] = None;
                 y[l] = parked[l];

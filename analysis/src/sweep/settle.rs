@@ -18,19 +18,18 @@
 
 use nalgebra::SMatrix;
 
-use crate::integrate::VectorField;
+use crate::integrate::{Projected, VectorField};
 
 /// The largest change of a point's λ1 [1/s] the shortcut is allowed, against the same point
 /// run step by step to the end (checked by the tests and the map benchmark).
 pub const SETTLED_TAIL_TOLERANCE: f64 = 1e-3;
 
-/// Whether the loop `field` (its tangent already projected) is at rest at `x` (time `t`) after
-/// an interval whose local exponent was `rate` [1/s]; `keep` are the kept coordinates.
+/// Whether the loop `field` (its tangent projected onto `field.keep`) is at rest at `x` (time
+/// `t`) after an interval whose local exponent was `rate` [1/s].
 pub(super) fn at_rest<F: VectorField<N>, const N: usize>(
-    field: &F,
+    field: &Projected<F, N>,
     t: f64,
     x: &[f64; N],
-    keep: &[bool; N],
     rate: f64,
     distance: f64,
 ) -> bool {
@@ -41,7 +40,7 @@ pub(super) fn at_rest<F: VectorField<N>, const N: usize>(
     field.rhs(t, x, &mut f);
     let speed = f
         .iter()
-        .zip(keep)
+        .zip(&field.keep)
         .filter(|(_, k)| **k)
         .map(|(v, _)| v * v)
         .sum::<f64>()

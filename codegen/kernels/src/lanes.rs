@@ -76,6 +76,8 @@ pub const fn splat(v: f64) -> Lanes {
 }
 
 /// Lane arrays `out[i][l] = rows[l][i]`: from one array per point to one lane array per entry.
+/// The definition the lanes kernel's builds (`wide::gather`, `wide_avx2::gather`) are tested
+/// against.
 #[inline(always)]
 pub fn gather<const N: usize>(rows: &[[f64; N]; LANES]) -> [Lanes; N] {
     let mut out = [[0.0; LANES]; N];
@@ -147,6 +149,24 @@ mod tests {
         let mut back = [[[0.0; 3]; 2]; LANES];
         scatter_matrix(&lanes, &mut back);
         assert_eq!(back, matrices);
+    }
+
+    /// The lanes kernel's gathers (one wide store per lane array) are [`gather`], for each
+    /// build this CPU can run.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn wide_gathers_are_the_gather() {
+        let rows: [[f64; 5]; LANES] =
+            core::array::from_fn(|l| core::array::from_fn(|i| (10 * l + i) as f64 - 0.5));
+        let reference = gather(&rows);
+        if crate::isa::best() >= crate::isa::Isa::Avx512 {
+            // SAFETY: the CPU has AVX-512F and AVX-512VL.
+            assert_eq!(unsafe { wide::gather(&rows) }, reference);
+        }
+        if crate::isa::best() >= crate::isa::Isa::Avx2 {
+            // SAFETY: the CPU has AVX2.
+            assert_eq!(unsafe { wide_avx2::gather(&rows) }, reference);
+        }
     }
 }
 
