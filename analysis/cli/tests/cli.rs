@@ -696,6 +696,21 @@ fn sweep_over_model_parameters() {
         ]),
         &["--kp is required"],
     );
+    fails_with(
+        &twv(&[
+            "sweep",
+            "--kp",
+            "0:8000:3",
+            "--kd",
+            "0:4000:3",
+            "--metric",
+            "spectral-abscissa",
+            "--full-horizon",
+            "--out",
+            dir.join("bad").to_str().unwrap(),
+        ]),
+        &["--full-horizon applies to --metric max-lyapunov only"],
+    );
     assert!(
         !dir.join("bad").exists(),
         "nothing written for a refused sweep"

@@ -116,6 +116,9 @@ impl SweepArgs {
                 .transpose()?,
             params,
         };
+        if self.full_horizon && self.metric != MetricArg::MaxLyapunov {
+            bail!("--full-horizon applies to --metric max-lyapunov only (the other metrics have no settled tail)");
+        }
         let controller = if self.controller.any() {
             self.controller.settings(Default::default(), None)?
         } else {
