@@ -248,77 +248,63 @@ pub fn lane_matrix_expr(o: &Output) -> TokenStream {
     matrix_of(dense_with(o, lane_zero()))
 }
 
-/// The column-form J·w of [`jw_columns`] for one tangent vector per lane: `out[r]` (lane
+/// The row form of J·w (`twv_kernels::tangents`) for one tangent vector per lane: `out[r]` (lane
 /// arrays) from the stored entries' values `jac.values` (lane arrays `vK`) and the gathered
-/// tangent `wl`, with per lane the one-point kernel's operations: the first column's product,
-/// then each further column's product added, structural zeros as 0.0.
+/// tangent `wl`, the one-point kernel's operations in every lane.
 pub fn lane_jw_rows(jac: &Output) -> TokenStream {
-    let columns = jac.stored_columns();
-    let rows = (0..jac.rows).map(|r| {
-        let terms = columns.iter().map(|(c, entries)| {
-            let entry = match entries[r] {
-                Some(e) => {
-                    let v = value(jac.values[e]);
-                    quote!(#v)
-                }
-                None => lane_zero(),
-            };
-            let c = index(*c);
-            quote!(wide::mul(#entry, wl[#c]))
-        });
-        terms
+    let rows = jac.stored_rows().into_iter().map(|row| {
+        row.into_iter()
+            .map(|(c, e)| {
+                let (v, c) = (value(jac.values[e]), index(c));
+                quote!(wide::mul(#v, wl[#c]))
+            })
             .reduce(|acc, t| quote!(wide::add(#acc, #t)))
             .unwrap_or_else(lane_zero)
     });
     quote!([#(#rows),*])
 }
 
-/// `out[k] = Σ_c J[:, c] · w[k][c]` over the columns of ∂f/∂x that have stored entries (in
-/// increasing order), from the stored entries `j`, in the column form of `twv_kernels::columns`
-/// (the interpreter computes the same operations).
-pub fn jw_columns(jac: &Output) -> TokenStream {
-    let columns: Vec<(usize, Vec<TokenStream>)> = jac
-        .stored_columns()
-        .into_iter()
-        .map(|(c, entries)| {
-            let column = entries.into_iter().map(|e| match e {
-                Some(e) => {
-                    let e = index(e);
-                    quote!(::twv_kernels::columns::opaque(j[#e]))
-                }
-                None => quote!(zero),
-            });
-            (c, column.collect())
-        })
-        .collect();
-    let rows = index(jac.rows);
-    let Some(((first, _), rest)) = columns.split_first() else {
-        return quote! {
-            for ok in out.iter_mut() {
-                *ok = [0.0; #rows];
-            }
-        };
-    };
-    let first = index(*first);
-    let rest_steps = rest.iter().enumerate().map(|(n, (c, _))| {
-        let (n, c) = (index(n + 1), index(*c));
-        quote!(::twv_kernels::columns::add_scaled(&mut acc, &cols[#n], wk[#c]);)
+/// `out[k] = J · w[k]` in the row form of `twv_kernels::tangents` from the stored entries `j`,
+/// for a body generic over its build `B: twv_kernels::tangents::Build`: groups of `LANES`
+/// tangent vectors in lane arrays where the build is wide, the rest one by one.
+pub fn jw_rows(jac: &Output) -> TokenStream {
+    let stored = jac.stored_rows();
+    let one = stored.iter().map(|row| {
+        row.iter()
+            .map(|&(c, e)| {
+                let (c, e) = (index(c), index(e));
+                quote!(j[#e] * wk[#c])
+            })
+            .reduce(|acc, t| quote!(#acc + #t))
+            .unwrap_or_else(|| quote!(0.0))
     });
-    let ncols = index(columns.len());
-    let grid = columns.iter().map(|(_, column)| quote!([#(#column),*]));
+    let lanes = stored.iter().map(|row| {
+        row.iter()
+            .map(|&(c, e)| {
+                let (c, e) = (index(c), index(e));
+                quote!(B::mul([j[#e]; ::twv_kernels::lanes::LANES], wl[#c]))
+            })
+            .reduce(|acc, t| quote!(B::add(#acc, #t)))
+            .unwrap_or_else(lane_zero)
+    });
     quote! {
-        // Opaque entries: otherwise the optimiser treats each lane of a column on its own
-        // (structural zeros, entries that are 1 or the negation of another) and turns one
-        // vector multiply-add per column into several shuffled scalar and vector operations.
-        let zero = ::twv_kernels::columns::opaque(0.0);
-        let cols: [[f64; #rows]; #ncols] = [#(#grid),*];
-        for (wk, ok) in w.iter().zip(out.iter_mut()) {
+        let count = w.len().min(out.len());
+        let grouped = ::twv_kernels::tangents::in_groups::<B>(count);
+        let (w_groups, _) = w[..grouped].as_chunks::<{ ::twv_kernels::lanes::LANES }>();
+        let (out_groups, _) = out[..grouped].as_chunks_mut::<{ ::twv_kernels::lanes::LANES }>();
+        for (wg, og) in w_groups.iter().zip(out_groups) {
+            // SAFETY: `B` is the build this body is compiled into, which runs only where the
+            // CPU has its instructions (`multiversion`).
+            unsafe {
+                let wl = B::gather(wg);
+                B::scatter(&[#(#lanes),*], og);
+            }
+        }
+        for (wk, ok) in w[grouped..count].iter().zip(&mut out[grouped..count]) {
             // An opaque address: otherwise the optimiser vectorises across the tangent vectors
-            // (with gathers and scatters, slower than scalar code) instead of along the columns.
+            // with gathers, slower than these scalar operations.
             let wk = ::core::hint::black_box(wk);
-            let mut acc = ::twv_kernels::columns::scaled(&cols[0], wk[#first]);
-            #(#rest_steps)*
-            *ok = acc;
+            *ok = [#(#one),*];
         }
     }
 }

@@ -5,7 +5,7 @@ use quote::{format_ident, quote};
 use twv_ir::{Arg, Function, Ir, Kind, Output};
 
 use crate::body::{
-    float, index, jw_columns, lane_jw_rows, lane_lets, lane_matrix_expr, lane_vector_expr, lets,
+    float, index, jw_rows, lane_jw_rows, lane_lets, lane_matrix_expr, lane_vector_expr, lets,
     matrix_expr, vector_expr,
 };
 use crate::{EmitError, Params};
@@ -269,7 +269,7 @@ fn constructors(
 fn kernels(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
     let (nx, nu) = (&p.nx, &p.nu);
     let jac = p.output("f_jac_x", "jac_x")?;
-    let jw = jw_columns(jac);
+    let jw = jw_rows(jac);
     let trace = trace_from_stored(jac);
     let f = multiversion(
         "kernel_f",
@@ -362,7 +362,7 @@ fn kernels(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
 }
 
 /// The variational kernel with one tangent vector at `LANES` points in one instruction stream
-/// (`twv_kernels::lanes`): IR functions `f_jac_x` and `jac_u` and the column-form J·w over lane
+/// (`twv_kernels::lanes`): IR functions `f_jac_x` and `jac_u` and the row-form J·w over lane
 /// arrays, per lane the operations of the one-point kernel, so every lane has its bits.
 fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
     let (nx, nu) = (&p.nx, &p.nu);
@@ -487,18 +487,19 @@ fn multiversion(
         }
         #[doc = #baseline_doc]
         pub fn #baseline(&self, #params) #ret {
-            self.#inlined(#args)
+            self.#inlined::<::twv_kernels::tangents::Baseline>(#args)
         }
         #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx2"))]
         unsafe fn #avx2(&self, #params) #ret {
-            self.#inlined(#args)
+            self.#inlined::<::twv_kernels::tangents::Avx2>(#args)
         }
         #[cfg_attr(target_arch = "x86_64", target_feature(enable = "avx512f,avx512vl"))]
         unsafe fn #avx512(&self, #params) #ret {
-            self.#inlined(#args)
+            self.#inlined::<::twv_kernels::tangents::Avx512>(#args)
         }
+        /// The body of every build; `B` names the build (`twv_kernels::tangents::Build`).
         #[inline(always)]
-        fn #inlined(&self, #params) #ret {
+        fn #inlined<B: ::twv_kernels::tangents::Build>(&self, #params) #ret {
             #body
         }
     }

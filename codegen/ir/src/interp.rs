@@ -48,10 +48,9 @@ impl Function {
 struct Program {
     ir: Ir,
     info: ModelInfo,
-    /// The columns of ∂f/∂x with stored entries, increasing, each with the value id in
-    /// `f_jac_x` of its entry in every row (`None`: structural zero): the column form of J·W
-    /// that the generated code uses (`twv_kernels::columns`).
-    jw_columns: Vec<(usize, Vec<Option<usize>>)>,
+    /// Each row of ∂f/∂x as its stored entries' (column, value id in `f_jac_x`), columns
+    /// increasing: the row form of J·W that every path computes (`twv_kernels::tangents`).
+    jw_rows: Vec<Vec<(usize, usize)>>,
     work_len: usize,
     /// Native code for the functions (run-time compiled), or `None`: interpret them.
     native: Option<Arc<dyn NativeCode>>,
@@ -79,9 +78,9 @@ impl Program {
             inputs: leak_names(ir.inputs().iter().map(|s| &s.name)),
             params: leak_names(ir.params().iter().map(|p| &p.name)),
         };
-        let jw_columns = ir
+        let jw_rows = ir
             .output("f_jac_x", "jac_x")
-            .map_or_else(Vec::new, Output::stored_column_values);
+            .map_or_else(Vec::new, Output::stored_row_values);
         let work_len = ir
             .functions()
             .values()
@@ -91,7 +90,7 @@ impl Program {
         Program {
             ir: ir.clone(),
             info,
-            jw_columns,
+            jw_rows,
             work_len,
             native,
         }
@@ -385,13 +384,13 @@ impl<const NX: usize, const NU: usize> Model<NX, NU> for Interpreted<NX, NU> {
                     .fold(0.0, |sum, (_, _, v)| sum + vals[v])
             });
             for (wk, ok) in w.iter().zip(out.iter_mut()) {
-                // The generated code's operations: the first column's products, then each
-                // further column's products added, structural zeros as 0.0.
+                // The row form: each row's stored products summed left to right, 0.0 where a
+                // row has none.
                 ok.fill(0.0);
-                for (n, (c, column)) in p.jw_columns.iter().enumerate() {
-                    for (slot, entry) in ok.iter_mut().zip(column) {
-                        let term = entry.map_or(0.0, |v| vals[v]) * wk[*c];
-                        *slot = if n == 0 { term } else { *slot + term };
+                for (slot, row) in ok.iter_mut().zip(&p.jw_rows) {
+                    let mut terms = row.iter().map(|&(c, v)| vals[v] * wk[c]);
+                    if let Some(first) = terms.next() {
+                        *slot = terms.fold(first, |sum, term| sum + term);
                     }
                 }
             }

@@ -179,35 +179,25 @@ impl Output {
             .flat_map(move |(col, w)| (w[0]..w[1]).map(move |e| (self.row[e], col, self.values[e])))
     }
 
-    /// The columns that have stored entries, increasing, each with the CCS index of its stored
-    /// entry in every row (`None`: structural zero): the layout of the column-form J·W that the
-    /// generated code and the interpreter share (`twv_kernels::columns`).
-    pub fn stored_columns(&self) -> Vec<(usize, Vec<Option<usize>>)> {
-        self.colind
-            .windows(2)
-            .enumerate()
-            .filter(|(_, w)| w[0] < w[1])
-            .map(|(col, w)| {
-                let mut rows = vec![None; self.rows];
-                for e in w[0]..w[1] {
-                    rows[self.row[e]] = Some(e);
-                }
-                (col, rows)
-            })
-            .collect()
+    /// Each row's stored entries in increasing column order, as (column, CCS index): the row
+    /// form of J·w that every path computes (`twv_kernels::tangents`).
+    pub fn stored_rows(&self) -> Vec<Vec<(usize, usize)>> {
+        let mut rows = vec![Vec::new(); self.rows];
+        for (e, (r, c, _)) in self.entries().enumerate() {
+            rows[r].push((c, e));
+        }
+        rows
     }
 
-    /// [`stored_columns`](Self::stored_columns) with each entry's value id instead of its CCS
+    /// [`stored_rows`](Self::stored_rows) with each entry's value id instead of its CCS
     /// index: what the interpreter's J·W multiplies by (the JIT's reads the entries by CCS index
     /// from an array of its own).
-    pub fn stored_column_values(&self) -> Vec<(usize, Vec<Option<usize>>)> {
-        let mut columns = self.stored_columns();
-        for (_, rows) in &mut columns {
-            for e in rows.iter_mut().flatten() {
-                *e = self.values[*e];
-            }
+    pub fn stored_row_values(&self) -> Vec<Vec<(usize, usize)>> {
+        let mut rows = self.stored_rows();
+        for (_, e) in rows.iter_mut().flatten() {
+            *e = self.values[*e];
         }
-        columns
+        rows
     }
 
     /// Whether two outputs store the same entries (same shape and pattern).

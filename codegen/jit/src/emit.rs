@@ -146,13 +146,12 @@ pub fn trace(b: &mut FunctionBuilder<'_>, entries: &[Value], jac: &Output) -> Va
 }
 
 /// The loop `for k in 0..count { out[k] = J · w[k] }` (rows of `nx`), with the interpreter's
-/// operations: column by column over the stored columns `columns` (indices of stored entries,
-/// read back from `entries`; `None` a structural zero, multiplied as 0.0), the first column's
-/// products, then each further one added. Leaves the builder in the block after the loop.
+/// operations: the row form over `rows` (each row's stored entries as (column, index), read
+/// back from `entries`). Leaves the builder in the block after the loop.
 pub fn jw_loop(
     b: &mut FunctionBuilder<'_>,
     entries: Value,
-    columns: &[(usize, Vec<Option<usize>>)],
+    rows: &[Vec<(usize, usize)>],
     nx: usize,
     (w, count, out): (Value, Value, Value),
 ) {
@@ -176,26 +175,7 @@ pub fn jw_loop(
     let row_bytes = b.ins().imul_imm_u(k, (nx * 8) as i64);
     let w_row = b.ins().iadd(w, row_bytes);
     let out_row = b.ins().iadd(out, row_bytes);
-    let zero = b.ins().f64const(0.0);
-    let mut slots = vec![zero; nx];
-    for (n, (c, column)) in columns.iter().enumerate() {
-        let wc = b.ins().load(types::F64, MEMORY, w_row, offset(*c));
-        for (slot, entry) in slots.iter_mut().zip(column) {
-            let j = match entry {
-                Some(e) => load(b, entries, *e),
-                None => zero,
-            };
-            let term = b.ins().fmul(j, wc);
-            *slot = if n == 0 {
-                term
-            } else {
-                b.ins().fadd(*slot, term)
-            };
-        }
-    }
-    for (r, value) in slots.into_iter().enumerate() {
-        b.ins().store(MEMORY, value, out_row, offset(r));
-    }
+    row_form(b, rows, nx, (w_row, 0, out_row), |b, e| load(b, entries, e));
     let next = b.ins().iadd_imm_u(k, 1);
     b.ins().jump(header, &[next.into()]);
     b.seal_block(header);
@@ -205,33 +185,45 @@ pub fn jw_loop(
 }
 
 /// J·W for exactly `count` tangent vectors, written out from the Jacobian's stored entries as
-/// values (`entries`, in order), for each vector the products of [`jw_loop`] in its order (the
-/// same bits): no loop, no address arithmetic, no trip through memory.
+/// values (`entries`, in order), for each vector the operations of [`jw_loop`] (the same bits):
+/// no loop, no address arithmetic, no trip through memory.
 pub fn jw_unrolled(
     b: &mut FunctionBuilder<'_>,
     entries: &[Value],
-    columns: &[(usize, Vec<Option<usize>>)],
+    rows: &[Vec<(usize, usize)>],
     nx: usize,
     (w, count, out): (Value, usize, Value),
 ) {
-    let zero = b.ins().f64const(0.0);
     for k in 0..count {
-        let mut slots = vec![zero; nx];
-        for (n, (c, column)) in columns.iter().enumerate() {
-            let wc = b.ins().load(types::F64, MEMORY, w, offset(k * nx + c));
-            for (slot, e) in slots.iter_mut().zip(column) {
-                let j = e.map_or(zero, |e| entries[e]);
-                let term = b.ins().fmul(j, wc);
-                *slot = if n == 0 {
-                    term
-                } else {
-                    b.ins().fadd(*slot, term)
-                };
-            }
+        row_form(b, rows, nx, (w, k * nx, out), |_, e| entries[e]);
+    }
+}
+
+/// One tangent vector's J·w in the row form (`twv_kernels::tangents`): for each of the `nx`
+/// rows its stored products `entry(e) · w[c]` summed left to right, 0.0 for a row without
+/// entries; `w` and `out` read and written at `w + 8·(at + i)`, `out + 8·(at + r)`.
+fn row_form(
+    b: &mut FunctionBuilder<'_>,
+    rows: &[Vec<(usize, usize)>],
+    nx: usize,
+    (w, at, out): (Value, usize, Value),
+    mut entry: impl FnMut(&mut FunctionBuilder<'_>, usize) -> Value,
+) {
+    let mut w_values: Vec<Option<Value>> = vec![None; nx];
+    for r in 0..nx {
+        let mut sum = None;
+        for &(c, e) in rows.get(r).map_or(&[][..], Vec::as_slice) {
+            let wc = *w_values[c]
+                .get_or_insert_with(|| b.ins().load(types::F64, MEMORY, w, offset(at + c)));
+            let j = entry(b, e);
+            let term = b.ins().fmul(j, wc);
+            sum = Some(match sum {
+                None => term,
+                Some(s) => b.ins().fadd(s, term),
+            });
         }
-        for (r, value) in slots.into_iter().enumerate() {
-            b.ins().store(MEMORY, value, out, offset(k * nx + r));
-        }
+        let value = sum.unwrap_or_else(|| b.ins().f64const(0.0));
+        b.ins().store(MEMORY, value, out, offset(at + r));
     }
 }
 

@@ -186,11 +186,11 @@ enum Shape<'a> {
     Work,
     /// Store this output densely, row-major, with a row stride given at run time.
     Dense(&'a twv_ir::Output),
-    /// ẋ, the J·W loop over these columns, the trace of this Jacobian.
+    /// ẋ, J·W over these rows (`Output::stored_rows`), the trace of this Jacobian.
     FJw {
         f: &'a twv_ir::Output,
         jac: &'a twv_ir::Output,
-        columns: &'a [(usize, Vec<Option<usize>>)],
+        rows: &'a [Vec<(usize, usize)>],
         /// `Some(k)`: J·W written out for exactly k tangent vectors; `None`: a loop.
         unrolled: Option<usize>,
     },
@@ -317,7 +317,7 @@ impl Builder {
             Shape::FJw {
                 f,
                 jac,
-                columns,
+                rows: jw_rows,
                 unrolled,
             } => {
                 let [w, count, f_out, out] = [3, 4, 5, 6].map(|i| params[i]);
@@ -329,7 +329,7 @@ impl Builder {
                     Some(k) => {
                         let values = emit::values(&mut b, &helpers, function, args, &sinks);
                         let entries: Vec<_> = jac.values.iter().map(|&v| values[v]).collect();
-                        emit::jw_unrolled(&mut b, &entries, columns, nx, (w, k, out));
+                        emit::jw_unrolled(&mut b, &entries, jw_rows, nx, (w, k, out));
                         emit::trace(&mut b, &entries, jac)
                     }
                     // Any size: they go to a stack array as soon as they exist, and the loop
@@ -350,7 +350,7 @@ impl Builder {
                             })
                             .collect();
                         let trace = emit::trace(&mut b, &entries, jac);
-                        emit::jw_loop(&mut b, array, columns, nx, (w, count, out));
+                        emit::jw_loop(&mut b, array, jw_rows, nx, (w, count, out));
                         trace
                     }
                 };
@@ -469,11 +469,11 @@ impl JitCode {
             .output("f_jac_x", "f")
             .filter(|f| self.is_state_column(f))?;
         let jac = self.ir.output("f_jac_x", "jac_x")?;
-        let columns = jac.stored_columns();
+        let rows = jac.stored_rows();
         let shape = Shape::FJw {
             f,
             jac,
-            columns: &columns,
+            rows: &rows,
             unrolled,
         };
         self.compile("f_jac_x", shape, as_f_jw)

@@ -151,22 +151,40 @@ mod tests {
         assert_eq!(back, matrices);
     }
 
-    /// The lanes kernel's gathers (one wide store per lane array) are [`gather`], for each
-    /// build this CPU can run.
+    /// The wide gathers and scatters (transposes of registers, masked at the end of a row) are
+    /// [`gather`] and [`scatter`], for rows shorter than, equal to and longer than a register,
+    /// for each build this CPU can run.
     #[test]
     #[cfg(target_arch = "x86_64")]
-    fn wide_gathers_are_the_gather() {
-        let rows: [[f64; 5]; LANES] =
-            core::array::from_fn(|l| core::array::from_fn(|i| (10 * l + i) as f64 - 0.5));
-        let reference = gather(&rows);
-        if crate::isa::best() >= crate::isa::Isa::Avx512 {
-            // SAFETY: the CPU has AVX-512F and AVX-512VL.
-            assert_eq!(unsafe { wide::gather(&rows) }, reference);
+    fn wide_gathers_and_scatters_are_the_definitions() {
+        fn check<const N: usize>() {
+            let rows: [[f64; N]; LANES] =
+                core::array::from_fn(|l| core::array::from_fn(|i| (10 * l + i) as f64 - 0.5));
+            let reference = gather(&rows);
+            let mut back = [[f64::NAN; N]; LANES];
+            if crate::isa::best() >= crate::isa::Isa::Avx512 {
+                // SAFETY: the CPU has AVX-512F and AVX-512VL.
+                assert_eq!(unsafe { wide::gather(&rows) }, reference);
+                // SAFETY: as above.
+                unsafe { wide::scatter(&reference, &mut back) };
+                assert_eq!(back, rows);
+            }
+            if crate::isa::best() >= crate::isa::Isa::Avx2 {
+                // SAFETY: the CPU has AVX2.
+                assert_eq!(unsafe { wide_avx2::gather(&rows) }, reference);
+                back = [[f64::NAN; N]; LANES];
+                // SAFETY: as above.
+                unsafe { wide_avx2::scatter(&reference, &mut back) };
+                assert_eq!(back, rows);
+            }
         }
-        if crate::isa::best() >= crate::isa::Isa::Avx2 {
-            // SAFETY: the CPU has AVX2.
-            assert_eq!(unsafe { wide_avx2::gather(&rows) }, reference);
-        }
+        check::<1>();
+        check::<3>();
+        check::<4>();
+        check::<5>();
+        check::<8>();
+        check::<11>();
+        check::<16>();
     }
 }
 
@@ -202,8 +220,58 @@ pub mod wide {
     op!(mul, _mm512_mul_pd);
     op!(div, _mm512_div_pd);
 
-    /// [`super::gather`] writing each lane array with one 8-wide store (see
-    /// [`super::wide_avx2::gather`] for why).
+    /// The 8×8 transpose of eight registers, `out[i][l] = rows[l][i]`, in 24 shuffles (pairs,
+    /// then 128-bit pieces, then halves).
+    #[target_feature(enable = "avx512f,avx512vl")]
+    #[inline]
+    fn transpose(r: [__m512d; LANES]) -> [__m512d; LANES] {
+        // t[2p] = r[2p][0] r[2p+1][0] r[2p][2] r[2p+1][2] …, t[2p+1] the odd entries.
+        let t = [
+            _mm512_unpacklo_pd(r[0], r[1]),
+            _mm512_unpackhi_pd(r[0], r[1]),
+            _mm512_unpacklo_pd(r[2], r[3]),
+            _mm512_unpackhi_pd(r[2], r[3]),
+            _mm512_unpacklo_pd(r[4], r[5]),
+            _mm512_unpackhi_pd(r[4], r[5]),
+            _mm512_unpacklo_pd(r[6], r[7]),
+            _mm512_unpackhi_pd(r[6], r[7]),
+        ];
+        // Entries 0, 1 (and 4, 5) of a and of b, or 2, 3 (and 6, 7).
+        let low = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0);
+        let high = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
+        // u[..4]: rows 0–3 of entries (0 | 4), (2 | 6), (1 | 5), (3 | 7); u[4..]: rows 4–7.
+        let u = [
+            _mm512_permutex2var_pd(t[0], low, t[2]),
+            _mm512_permutex2var_pd(t[0], high, t[2]),
+            _mm512_permutex2var_pd(t[1], low, t[3]),
+            _mm512_permutex2var_pd(t[1], high, t[3]),
+            _mm512_permutex2var_pd(t[4], low, t[6]),
+            _mm512_permutex2var_pd(t[4], high, t[6]),
+            _mm512_permutex2var_pd(t[5], low, t[7]),
+            _mm512_permutex2var_pd(t[5], high, t[7]),
+        ];
+        // The low (0x44) or high (0xEE) halves of rows 0–3 and of rows 4–7.
+        [
+            _mm512_shuffle_f64x2::<0x44>(u[0], u[4]),
+            _mm512_shuffle_f64x2::<0x44>(u[2], u[6]),
+            _mm512_shuffle_f64x2::<0x44>(u[1], u[5]),
+            _mm512_shuffle_f64x2::<0x44>(u[3], u[7]),
+            _mm512_shuffle_f64x2::<0xEE>(u[0], u[4]),
+            _mm512_shuffle_f64x2::<0xEE>(u[2], u[6]),
+            _mm512_shuffle_f64x2::<0xEE>(u[1], u[5]),
+            _mm512_shuffle_f64x2::<0xEE>(u[3], u[7]),
+        ]
+    }
+
+    /// Entries `0..n` of a register (n ≤ 8).
+    #[inline(always)]
+    fn first(n: usize) -> __mmask8 {
+        (((1u16 << n) - 1) & 0xFF) as __mmask8
+    }
+
+    /// [`super::gather`] by 8×8 transposes of registers (the rows read 8 entries at a time, the
+    /// last piece masked), each lane array written with one 8-wide store (see
+    /// [`super::wide_avx2::gather`] for why that matters).
     ///
     /// # Safety
     /// The CPU must have AVX-512F and AVX-512VL.
@@ -211,15 +279,41 @@ pub mod wide {
     #[inline]
     pub fn gather<const N: usize>(rows: &[[f64; N]; LANES]) -> [Lanes; N] {
         let mut out = [[0.0; LANES]; N];
-        for (i, lanes) in out.iter_mut().enumerate() {
-            let v = _mm512_set_pd(
-                rows[7][i], rows[6][i], rows[5][i], rows[4][i], rows[3][i], rows[2][i], rows[1][i],
-                rows[0][i],
-            );
-            // SAFETY: an unaligned store of 8 doubles into an array of 8.
-            unsafe { _mm512_storeu_pd(lanes.as_mut_ptr(), v) };
+        for start in (0..N).step_by(LANES) {
+            let mask = first((N - start).min(LANES));
+            let mut r = [_mm512_setzero_pd(); LANES];
+            for (r, row) in r.iter_mut().zip(rows) {
+                // SAFETY: a masked load of entries start.. < N of an array of N.
+                *r = unsafe { _mm512_maskz_loadu_pd(mask, row.as_ptr().add(start)) };
+            }
+            for (lanes, v) in out[start..].iter_mut().zip(transpose(r)) {
+                // SAFETY: an unaligned store of 8 doubles into an array of 8.
+                unsafe { _mm512_storeu_pd(lanes.as_mut_ptr(), v) };
+            }
         }
         out
+    }
+
+    /// [`super::scatter`] by 8×8 transposes of registers, each row written 8 entries at a time
+    /// (the last piece masked).
+    ///
+    /// # Safety
+    /// The CPU must have AVX-512F and AVX-512VL.
+    #[target_feature(enable = "avx512f,avx512vl")]
+    #[inline]
+    pub fn scatter<const N: usize>(lanes: &[Lanes; N], rows: &mut [[f64; N]; LANES]) {
+        for start in (0..N).step_by(LANES) {
+            let mask = first((N - start).min(LANES));
+            let mut c = [_mm512_setzero_pd(); LANES];
+            for (c, lanes) in c.iter_mut().zip(&lanes[start..]) {
+                // SAFETY: an unaligned load of 8 doubles from an array of 8.
+                *c = unsafe { _mm512_loadu_pd(lanes.as_ptr()) };
+            }
+            for (row, v) in rows.iter_mut().zip(transpose(c)) {
+                // SAFETY: a masked store of entries start.. < N of an array of N.
+                unsafe { _mm512_mask_storeu_pd(row.as_mut_ptr().add(start), mask, v) };
+            }
+        }
     }
 
     /// (sin, cos) of every lane with the bits of [`crate::trig::sin_cos`], all lanes in one
@@ -371,11 +465,71 @@ pub mod wide_avx2 {
     op!(mul, _mm256_mul_pd);
     op!(div, _mm256_div_pd);
 
-    /// [`super::gather`] writing each half of a lane array with one 4-wide store: the
-    /// operations read lane arrays with 4-wide loads, and a wide load of data just written one
-    /// double at a time cannot be forwarded from the store buffer — it waits for the stores to
-    /// reach the cache (in the AVX2 map a third of the 8-wide sincos's time sat on its input's
-    /// load).
+    /// The 4×4 transpose of four registers, `out[i][l] = rows[l][i]`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn transpose(r: [__m256d; HALF]) -> [__m256d; HALF] {
+        let t = [
+            _mm256_unpacklo_pd(r[0], r[1]),
+            _mm256_unpackhi_pd(r[0], r[1]),
+            _mm256_unpacklo_pd(r[2], r[3]),
+            _mm256_unpackhi_pd(r[2], r[3]),
+        ];
+        [
+            _mm256_permute2f128_pd::<0x20>(t[0], t[2]),
+            _mm256_permute2f128_pd::<0x20>(t[1], t[3]),
+            _mm256_permute2f128_pd::<0x31>(t[0], t[2]),
+            _mm256_permute2f128_pd::<0x31>(t[1], t[3]),
+        ]
+    }
+
+    /// Lanes `0..n` of a 4-lane mask (sign bits set), n ≤ 4.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn first(n: usize) -> __m256i {
+        let on = |l: usize| if l < n { -1i64 } else { 0 };
+        _mm256_set_epi64x(on(3), on(2), on(1), on(0))
+    }
+
+    /// Four entries of an array from `at` (`n` < 4 of them masked).
+    ///
+    /// # Safety
+    /// `at..at + n` must be in the array.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn load(at: *const f64, n: usize) -> __m256d {
+        // SAFETY: the caller's.
+        unsafe {
+            if n == HALF {
+                _mm256_loadu_pd(at)
+            } else {
+                _mm256_maskload_pd(at, first(n))
+            }
+        }
+    }
+
+    /// Writes four entries of an array from `at` (`n` < 4 of them masked).
+    ///
+    /// # Safety
+    /// `at..at + n` must be in the array.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn store(at: *mut f64, n: usize, v: __m256d) {
+        // SAFETY: the caller's.
+        unsafe {
+            if n == HALF {
+                _mm256_storeu_pd(at, v)
+            } else {
+                _mm256_maskstore_pd(at, first(n), v)
+            }
+        }
+    }
+
+    /// [`super::gather`] by 4×4 transposes of registers, each half of a lane array written with
+    /// one 4-wide store: the operations read lane arrays with 4-wide loads, and a wide load of
+    /// data just written one double at a time cannot be forwarded from the store buffer — it
+    /// waits for the stores to reach the cache (in the AVX2 map a third of the 8-wide sincos's
+    /// time sat on its input's load).
     ///
     /// # Safety
     /// The CPU must have AVX2.
@@ -383,14 +537,57 @@ pub mod wide_avx2 {
     #[inline]
     pub fn gather<const N: usize>(rows: &[[f64; N]; LANES]) -> [Lanes; N] {
         let mut out = [[0.0; LANES]; N];
-        for (i, lanes) in out.iter_mut().enumerate() {
-            for h in [0, HALF] {
-                let v = _mm256_set_pd(rows[h + 3][i], rows[h + 2][i], rows[h + 1][i], rows[h][i]);
-                // SAFETY: an unaligned store of 4 doubles at offset 0 or 4 of an array of 8.
-                unsafe { _mm256_storeu_pd(lanes.as_mut_ptr().add(h), v) };
+        for h in [0, HALF] {
+            for start in (0..N).step_by(HALF) {
+                gather_block(rows, h, start, &mut out);
             }
         }
         out
+    }
+
+    /// Entries `start..start + 4` (fewer at the end) of rows `h..h + 4` into lanes `h..h + 4`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn gather_block<const N: usize>(
+        rows: &[[f64; N]; LANES],
+        h: usize,
+        start: usize,
+        out: &mut [Lanes; N],
+    ) {
+        let n = (N - start).min(HALF);
+        let mut r = [_mm256_setzero_pd(); HALF];
+        for (r, row) in r.iter_mut().zip(&rows[h..]) {
+            // SAFETY: entries start..start + n ≤ N of an array of N.
+            *r = unsafe { load(row.as_ptr().add(start), n) };
+        }
+        for (lanes, v) in out[start..].iter_mut().zip(transpose(r)) {
+            // SAFETY: entries h..h + 4 ≤ 8 of an array of 8.
+            unsafe { store(lanes.as_mut_ptr().add(h), HALF, v) };
+        }
+    }
+
+    /// [`super::scatter`] by 4×4 transposes of registers, each row written 4 entries at a time
+    /// (the last piece masked).
+    ///
+    /// # Safety
+    /// The CPU must have AVX2.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub fn scatter<const N: usize>(lanes: &[Lanes; N], rows: &mut [[f64; N]; LANES]) {
+        for h in [0, HALF] {
+            for start in (0..N).step_by(HALF) {
+                let n = (N - start).min(HALF);
+                let mut c = [_mm256_setzero_pd(); HALF];
+                for (c, lanes) in c.iter_mut().zip(&lanes[start..]) {
+                    // SAFETY: entries h..h + 4 ≤ 8 of an array of 8.
+                    *c = unsafe { load(lanes.as_ptr().add(h), HALF) };
+                }
+                for (row, v) in rows[h..].iter_mut().zip(transpose(c)) {
+                    // SAFETY: entries start..start + n ≤ N of an array of N.
+                    unsafe { store(row.as_mut_ptr().add(start), n, v) };
+                }
+            }
+        }
     }
 
     /// `m ? b : a` per lane, `m` all-ones or zero per lane.

@@ -5,10 +5,10 @@
 //!   interpreter's and the generated code's, so the two agree bit for bit;
 //! - [`isa`]: the run-time choice between the x86-64 baseline and AVX-512 builds of a kernel;
 //! - [`lanes`]: 8-lane arithmetic for kernels that evaluate eight points at once;
-//! - [`columns`]: the column form of J·W.
+//! - [`tangents`]: J·W in the row form every path shares, many tangent vectors at once.
 #![no_std]
 
-pub mod columns;
 pub mod isa;
 pub mod lanes;
+pub mod tangents;
 pub mod trig;

@@ -31,8 +31,19 @@ pub(crate) fn random_point<const NX: usize, const NU: usize>(
     )
 }
 
+/// K tangent vectors of [`tangent_entry`]s.
 pub(crate) fn random_w<const NX: usize, const K: usize>(rng: &mut ChaCha8Rng) -> [[f64; NX]; K] {
-    std::array::from_fn(|_| std::array::from_fn(|_| rng.gen_range(-1.0..1.0)))
+    std::array::from_fn(|_| std::array::from_fn(|_| tangent_entry(rng)))
+}
+
+/// A tangent vector's entry: mostly in (-1, 1), one in eight an exact +0 or -0 (where a J·W
+/// that summed other terms than the row form's could differ in the sign of a zero).
+pub(crate) fn tangent_entry(rng: &mut ChaCha8Rng) -> f64 {
+    match rng.gen_range(0..16) {
+        0 => 0.0,
+        1 => -0.0,
+        _ => rng.gen_range(-1.0..1.0),
+    }
 }
 
 #[track_caller]
@@ -118,6 +129,21 @@ pub(crate) fn same_model<const NX: usize, const NU: usize>(
             u3.as_flattened(),
             ub.as_flattened(),
             &format!("{what} f_jw_jac_u jac_u"),
+        );
+    }
+    // Eleven tangent vectors: a group of eight in lane arrays (generated code on a wide build)
+    // and three one by one, against the interpreter's row form, some entries ±0.
+    for _ in 0..20 {
+        let (x, u) = random_point::<NX, NU>(&mut rng);
+        let w = random_w::<NX, 11>(&mut rng);
+        let (mut fa, mut fb, mut oa, mut ob) =
+            ([0.0; NX], [0.0; NX], [[0.0; NX]; 11], [[0.0; NX]; 11]);
+        a.f_jw(&x, &u, &w, &mut fa, &mut oa);
+        b.f_jw(&x, &u, &w, &mut fb, &mut ob);
+        assert_bits(
+            oa.as_flattened(),
+            ob.as_flattened(),
+            &format!("{what} f_jw K=11"),
         );
     }
     // Eight points at once (generated: one instruction stream; interpreter: the trait's

@@ -22,7 +22,7 @@ fn random_point<const NX: usize, const NU: usize>(rng: &mut ChaCha8Rng) -> ([f64
 }
 
 /// The dispatching kernels (the build of the instruction set in force) against the baseline
-/// builds, at 500 random points, with 1, 2 and NX tangent vectors.
+/// builds, at 500 random points, with 1, 2, NX and 11 tangent vectors (some entries ±0).
 macro_rules! both_builds_agree {
     ($model:expr, $nx:literal, $nu:literal, $what:expr) => {{
         let m = $model;
@@ -53,9 +53,10 @@ macro_rules! both_builds_agree {
             );
             assert_bits(&ea, &eb, &format!("{what} f_jac_x entries"));
             assert_bits(&a, &b, &format!("{what} f_jac_x f"));
-            for k in [1, 2, $nx] {
+            // 11: a group of eight tangent vectors in lane arrays and three one by one.
+            for k in [1, 2, $nx, 11] {
                 let w: Vec<[f64; $nx]> = (0..k)
-                    .map(|_| std::array::from_fn(|_| rng.gen_range(-1.0..1.0)))
+                    .map(|_| std::array::from_fn(|_| crate::codegen::tangent_entry(&mut rng)))
                     .collect();
                 let (mut oa, mut ob) = (vec![[0.0; $nx]; k], vec![[0.0; $nx]; k]);
                 let ta = m.kernel_variational(&x, &u, &w, &mut a, &mut oa, Some(&mut ja));
