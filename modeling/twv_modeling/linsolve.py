@@ -3,6 +3,11 @@
 An LDL^T factorization without pivoting (M is symmetric positive definite) that never builds a
 term for a structurally zero entry: a block-diagonal M (the vehicles' pitch/forward and
 lateral/yaw blocks) stays block-diagonal, so the symbolic expressions stay small.
+
+Each update subtracts L_ik U_jk, where U_jk = L_jk d_k is the entry before its division by the
+pivot (kept, not recomputed): one product instead of L_ik L_jk d_k's two, and a shorter chain
+from the angles to the next pivot (vehicle8: 2 operations fewer in f and in f + df/dx, 4 fewer
+dependent operations before the Jacobian's last entry).
 """
 
 from __future__ import annotations
@@ -19,19 +24,21 @@ def solve_spd(M: ca.SX, b: ca.SX) -> ca.SX:
     n = M.size1()
     A = [[ca.SX(M[i, j]) for j in range(n)] for i in range(n)]
     L: list[list[ca.SX | None]] = [[None] * n for _ in range(n)]
+    U: list[list[ca.SX | None]] = [[None] * n for _ in range(n)]  # U[i][j] = L[i][j] d[j]
     d: list[ca.SX] = []
     for j in range(n):
         s = A[j][j]
         for k in range(j):
             if L[j][k] is not None:
-                s = s - L[j][k] * L[j][k] * d[k]
+                s = s - L[j][k] * U[j][k]
         d.append(s)
         for i in range(j + 1, n):
             s = A[i][j]
             for k in range(j):
-                if L[i][k] is not None and L[j][k] is not None:
-                    s = s - L[i][k] * L[j][k] * d[k]
+                if L[i][k] is not None and U[j][k] is not None:
+                    s = s - L[i][k] * U[j][k]
             if not is_structural_zero(s):
+                U[i][j] = s
                 L[i][j] = s / d[j]
     y: list[ca.SX] = []
     for i in range(n):
