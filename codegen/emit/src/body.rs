@@ -2,7 +2,7 @@
 //! its outputs.
 
 use proc_macro2::{Ident, Literal, TokenStream};
-use quote::{format_ident, quote};
+use quote::{format_ident, quote, ToTokens};
 use twv_ir::{Arg, BinaryOp, Function, Instr, Output, UnaryOp};
 
 use crate::Params;
@@ -37,8 +37,19 @@ pub fn index(i: usize) -> Literal {
 
 /// The `let` statements of `f`. Parameters come from `self.params` or are folded as constants.
 pub fn lets(f: &Function, params: &Params) -> TokenStream {
+    let (pairs, paired) = angle_pairs(f, params);
     let lets = f.instructions().iter().enumerate().map(|(k, instr)| {
         let v = value(k);
+        if let Instr::Unary(op @ (UnaryOp::Sin | UnaryOp::Cos), x) = *instr {
+            if let Some(sc) = paired.get(&x) {
+                let part = if op == UnaryOp::Sin {
+                    quote!(0)
+                } else {
+                    quote!(1)
+                };
+                return quote!(let #v: f64 = #sc.#part;);
+            }
+        }
         let rhs = match *instr {
             Instr::Input { arg, index: i } => input(arg, i, params),
             Instr::Const(c) => float(c),
@@ -47,7 +58,49 @@ pub fn lets(f: &Function, params: &Params) -> TokenStream {
         };
         quote!(let #v: f64 = #rhs;)
     });
-    quote!(#(#lets)*)
+    quote!(#(#pairs)* #(#lets)*)
+}
+
+/// The angles of `f` taken two at a time by `twv_kernels::trig::sin_cos_pair`: those whose sine
+/// or cosine `f` takes and that are states or inputs (so they exist before any instruction), in
+/// order of first use, paired off (an odd one out keeps its own `sin_cos`). Returns the pair
+/// calls, to go first, and for each paired angle's value id the name of its (sin, cos).
+fn angle_pairs(
+    f: &Function,
+    params: &Params,
+) -> (Vec<TokenStream>, std::collections::BTreeMap<usize, Ident>) {
+    let mut angles: Vec<usize> = Vec::new();
+    for instr in f.instructions() {
+        if let Instr::Unary(UnaryOp::Sin | UnaryOp::Cos, x) = *instr {
+            let is_signal = matches!(
+                f.instructions().get(x),
+                Some(Instr::Input {
+                    arg: Arg::X | Arg::U,
+                    ..
+                })
+            );
+            if is_signal && !angles.contains(&x) {
+                angles.push(x);
+            }
+        }
+    }
+    let mut paired = std::collections::BTreeMap::new();
+    let calls = angles
+        .chunks_exact(2)
+        .map(|pair| {
+            let [(sa, ea), (sb, eb)] = [pair[0], pair[1]].map(|x| {
+                let expr = match f.instructions()[x] {
+                    Instr::Input { arg, index: i } => input(arg, i, params),
+                    _ => value(x).into_token_stream(),
+                };
+                (format_ident!("sc{}", x), expr)
+            });
+            paired.insert(pair[0], sa.clone());
+            paired.insert(pair[1], sb.clone());
+            quote!(let (#sa, #sb) = ::twv_kernels::trig::sin_cos_pair(#ea, #eb);)
+        })
+        .collect();
+    (calls, paired)
 }
 
 /// The `let`s of `f` over lane arrays (`twv_kernels::lanes`), calling the lane operations as

@@ -53,7 +53,7 @@ unsafe extern "C" {
 /// (sin x, cos x). Call it once per angle: sin and cos share the reduction.
 #[inline(always)]
 pub fn sin_cos(x: f64) -> (f64, f64) {
-    let high = (x.to_bits() >> 32) as u32 & 0x7FFF_FFFF;
+    let high = high_word(x);
     if high <= PIO4_HIGH {
         if high < TINY_HIGH {
             // Also keeps the sign of -0.0.
@@ -73,6 +73,79 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
         1 => (c, -s),
         2 => (-s, -c),
         _ => (-c, s),
+    }
+}
+
+/// ((sin a, cos a), (sin b, cos b)) with the bits of [`sin_cos`] for each: the kernels with
+/// the most angles have two (vehicle8's pitch and yaw). Where both are in the range that needs
+/// no reduction (2^-27 ≤ |x| ≲ π/4, where the vehicle's angles mostly are) the two angles'
+/// polynomials run side by side in the two lanes of SSE2 registers — the x86-64 baseline, so
+/// in every build — with the scalar operations in their order; otherwise one after the other.
+#[inline(always)]
+pub fn sin_cos_pair(a: f64, b: f64) -> ((f64, f64), (f64, f64)) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let in_range = |x: f64| (TINY_HIGH..=PIO4_HIGH).contains(&high_word(x));
+        if in_range(a) && in_range(b) {
+            return pair::unreduced(a, b);
+        }
+    }
+    (sin_cos(a), sin_cos(b))
+}
+
+/// The high 32 bits of |x|'s representation.
+#[inline(always)]
+fn high_word(x: f64) -> u32 {
+    (x.to_bits() >> 32) as u32 & 0x7FFF_FFFF
+}
+
+/// [`kernel_sin`] and [`kernel_cos`] without a tail for two arguments at once.
+#[cfg(target_arch = "x86_64")]
+mod pair {
+    use super::*;
+    use core::arch::x86_64::*;
+
+    /// The operations of `kernel_sin(x, 0.0, false)` and `kernel_cos(x, 0.0)`, line for line,
+    /// on (a, b) in the two lanes.
+    #[inline(always)]
+    pub(super) fn unreduced(a: f64, b: f64) -> ((f64, f64), (f64, f64)) {
+        // SAFETY: SSE2 is part of the x86-64 baseline, present on every CPU this runs on.
+        unsafe {
+            let k = _mm_set1_pd;
+            let (add, sub, mul) = (_mm_add_pd, _mm_sub_pd, _mm_mul_pd);
+            let x = _mm_set_pd(b, a);
+            let z = mul(x, x);
+            let w = mul(z, z);
+            // sin: x + v (S1 + z r), r = S2 + z (S3 + z S4) + z w (S5 + z S6).
+            let r = add(
+                add(k(S2), mul(z, add(k(S3), mul(z, k(S4))))),
+                mul(mul(z, w), add(k(S5), mul(z, k(S6)))),
+            );
+            let v = mul(z, x);
+            let s = add(x, mul(v, add(k(S1), mul(z, r))));
+            // cos: w' + (((1 − w') − hz) + (z r − x·0)), w' = 1 − hz, hz = z/2.
+            let r = add(
+                mul(z, add(k(C1), mul(z, add(k(C2), mul(z, k(C3)))))),
+                mul(mul(w, w), add(k(C4), mul(z, add(k(C5), mul(z, k(C6)))))),
+            );
+            let hz = mul(k(0.5), z);
+            let w = sub(k(1.0), hz);
+            let c = add(
+                w,
+                add(sub(sub(k(1.0), w), hz), sub(mul(z, r), mul(x, k(0.0)))),
+            );
+            let lane = |v: __m128d, high: bool| {
+                if high {
+                    _mm_cvtsd_f64(_mm_unpackhi_pd(v, v))
+                } else {
+                    _mm_cvtsd_f64(v)
+                }
+            };
+            (
+                (lane(s, false), lane(c, false)),
+                (lane(s, true), lane(c, true)),
+            )
+        }
     }
 }
 

@@ -190,3 +190,33 @@ fn eight_wide_sin_cos_has_the_bits_of_the_scalar_one_on_every_isa_here() {
     // The dispatched entry, whatever build it picks here.
     lanes_have_the_scalar_bits(twv_kernels::lanes::sin_cos);
 }
+
+/// `sin_cos_pair` has the bits of `sin_cos` for each of its two angles, whichever paths they
+/// take: every argument of `every_path` paired with a shifted copy of the list (both in the
+/// unreduced range, one or none), and with the special values.
+#[test]
+#[cfg(target_arch = "x86_64")]
+fn paired_sin_cos_has_the_bits_of_the_scalar_one() {
+    use twv_kernels::trig::sin_cos_pair;
+    let same = |(s, c): (f64, f64), x: f64| {
+        let (s1, c1) = sin_cos(x);
+        (s.to_bits() == s1.to_bits() || (s.is_nan() && s1.is_nan()))
+            && (c.to_bits() == c1.to_bits() || (c.is_nan() && c1.is_nan()))
+    };
+    let mut xs = every_path();
+    xs.extend([f64::NAN, f64::INFINITY, -f64::INFINITY, 1e7, -0.0]);
+    let mut unreduced = 0;
+    for shift in [1, 7, 3001] {
+        for (i, &a) in xs.iter().enumerate() {
+            let b = xs[(i + shift) % xs.len()];
+            let (pa, pb) = sin_cos_pair(a, b);
+            assert!(same(pa, a), "sin_cos_pair({a:e}, {b:e}): first");
+            assert!(same(pb, b), "sin_cos_pair({a:e}, {b:e}): second");
+            if [a, b].iter().all(|x| (2f64.powi(-27)..=0.785).contains(&x.abs())) {
+                unreduced += 1;
+            }
+        }
+    }
+    // The two-lane path ran, not only the fallback.
+    assert!(unreduced > 10_000, "{unreduced} pairs in the unreduced range");
+}
