@@ -61,34 +61,19 @@ pub fn lets(f: &Function, params: &Params) -> TokenStream {
     quote!(#(#pairs)* #(#lets)*)
 }
 
-/// The angles of `f` taken two at a time by `twv_kernels::trig::sin_cos_pair`: those whose sine
-/// or cosine `f` takes and that are states or inputs (so they exist before any instruction), in
-/// order of first use, paired off (an odd one out keeps its own `sin_cos`). Returns the pair
-/// calls, to go first, and for each paired angle's value id the name of its (sin, cos).
+/// The calls of `twv_kernels::trig::sin_cos_pair` for `f`'s paired angles
+/// (`Function::paired_angles`), to go first, and for each paired angle's value id the name of
+/// its (sin, cos).
 fn angle_pairs(
     f: &Function,
     params: &Params,
 ) -> (Vec<TokenStream>, std::collections::BTreeMap<usize, Ident>) {
-    let mut angles: Vec<usize> = Vec::new();
-    for instr in f.instructions() {
-        if let Instr::Unary(UnaryOp::Sin | UnaryOp::Cos, x) = *instr {
-            let is_signal = matches!(
-                f.instructions().get(x),
-                Some(Instr::Input {
-                    arg: Arg::X | Arg::U,
-                    ..
-                })
-            );
-            if is_signal && !angles.contains(&x) {
-                angles.push(x);
-            }
-        }
-    }
     let mut paired = std::collections::BTreeMap::new();
-    let calls = angles
-        .chunks_exact(2)
+    let calls = f
+        .paired_angles()
+        .into_iter()
         .map(|pair| {
-            let [(sa, ea), (sb, eb)] = [pair[0], pair[1]].map(|x| {
+            let [(sa, ea), (sb, eb)] = pair.map(|x| {
                 let expr = match f.instructions()[x] {
                     Instr::Input { arg, index: i } => input(arg, i, params),
                     _ => value(x).into_token_stream(),

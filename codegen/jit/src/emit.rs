@@ -17,6 +17,10 @@ const MEMORY: MemFlagsData = MemFlagsData::trusted();
 pub struct Helpers {
     pub unary: FuncRef,
     pub binary: FuncRef,
+    /// `twv_sin_cos_pair(a, b, out)`: the sines and cosines of two angles.
+    pub sin_cos_pair: FuncRef,
+    /// The target's pointer type (for the pair's stack slot).
+    pub pointer: types::Type,
 }
 
 /// The byte offset of entry `index` of an f64 slice (bounded by the size check of
@@ -40,6 +44,7 @@ pub fn values(
     args: [Value; 3],
     sinks: &Sinks,
 ) -> Vec<Value> {
+    let paired = sin_cos_pairs(b, helpers, function, args);
     let mut values: Vec<Value> = Vec::with_capacity(function.n_values());
     for (instr, sinks) in function.instructions().iter().zip(sinks) {
         let value = match *instr {
@@ -48,6 +53,14 @@ pub fn values(
                     .load(types::F64, MEMORY, args[arg.number()], offset(index))
             }
             Instr::Const(c) => b.ins().f64const(c),
+            Instr::Unary(op @ (UnaryOp::Sin | UnaryOp::Cos), a) if paired.contains_key(&a) => {
+                let (sin, cos) = paired[&a];
+                if op == UnaryOp::Sin {
+                    sin
+                } else {
+                    cos
+                }
+            }
             Instr::Unary(op, a) => unary(b, helpers.unary, op, values[a]),
             Instr::Binary(op, l, r) => binary(b, helpers.binary, op, values[l], values[r]),
         };
@@ -57,6 +70,37 @@ pub fn values(
         values.push(value);
     }
     values
+}
+
+/// The sines and cosines of `function`'s paired angles (`Function::paired_angles`, the
+/// generated code's pairs), one `twv_sin_cos_pair` call per pair at the top of the routine, the
+/// angles read straight from x or u: for each paired angle's value id, (sin, cos).
+fn sin_cos_pairs(
+    b: &mut FunctionBuilder<'_>,
+    helpers: &Helpers,
+    function: &Function,
+    args: [Value; 3],
+) -> std::collections::BTreeMap<usize, (Value, Value)> {
+    let mut paired = std::collections::BTreeMap::new();
+    for pair in function.paired_angles() {
+        let [a, c] = pair.map(|x| match function.instructions()[x] {
+            Instr::Input { arg, index } => {
+                b.ins()
+                    .load(types::F64, MEMORY, args[arg.number()], offset(index))
+            }
+            // `paired_angles` pairs inputs only.
+            _ => b.ins().f64const(f64::NAN),
+        });
+        let slot =
+            b.create_sized_stack_slot(StackSlotData::new(StackSlotKind::ExplicitSlot, 32, 3));
+        let out = b.ins().stack_addr(helpers.pointer, slot, 0);
+        b.ins().call(helpers.sin_cos_pair, &[a, c, out]);
+        let [sa, ca, sc, cc] =
+            [0, 1, 2, 3].map(|i| b.ins().load(types::F64, MEMORY, out, offset(i)));
+        paired.insert(pair[0], (sa, ca));
+        paired.insert(pair[1], (sc, cc));
+    }
+    paired
 }
 
 /// Adds sinks that store every value an output of `function` reads at `work[id]`.

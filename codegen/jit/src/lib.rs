@@ -168,6 +168,16 @@ extern "C" fn twv_binary(op: u32, a: f64, b: f64) -> f64 {
         .map_or(f64::NAN, |o| o.apply(a, b))
 }
 
+/// `twv_kernels::trig::sin_cos_pair(a, b)` into `out[0..4]` as (sin a, cos a, sin b, cos b).
+///
+/// # Safety
+/// `out` must be valid for writing 4 doubles.
+unsafe extern "C" fn twv_sin_cos_pair(a: f64, b: f64, out: *mut f64) {
+    let ((sa, ca), (sb, cb)) = twv_kernels::trig::sin_cos_pair(a, b);
+    // SAFETY: the caller's; the routines pass a 32-byte stack slot of their own.
+    unsafe { core::ptr::copy_nonoverlapping([sa, ca, sb, cb].as_ptr(), out, 4) };
+}
+
 /// How many entries of x, u and p `function` reads.
 fn reads(function: &Function) -> [usize; 3] {
     let mut n = [0; 3];
@@ -201,6 +211,7 @@ struct Builder {
     module: JITModule,
     unary: FuncId,
     binary: FuncId,
+    sin_cos_pair: FuncId,
 }
 
 impl Builder {
@@ -235,6 +246,7 @@ impl Builder {
         let mut jit = JITBuilder::with_isa(isa, default_libcall_names());
         jit.symbol("twv_unary", twv_unary as *const u8);
         jit.symbol("twv_binary", twv_binary as *const u8);
+        jit.symbol("twv_sin_cos_pair", twv_sin_cos_pair as *const u8);
         let mut module = JITModule::new(jit);
         let helper = |module: &mut JITModule, name: &str, operands: usize| {
             let mut sig = module.make_signature();
@@ -248,10 +260,21 @@ impl Builder {
         };
         let unary = helper(&mut module, "twv_unary", 1)?;
         let binary = helper(&mut module, "twv_binary", 2)?;
+        let mut sig = module.make_signature();
+        let pointer = module.target_config().pointer_type();
+        sig.params.extend([
+            AbiParam::new(types::F64),
+            AbiParam::new(types::F64),
+            AbiParam::new(pointer),
+        ]);
+        let sin_cos_pair = module
+            .declare_function("twv_sin_cos_pair", Linkage::Import, &sig)
+            .map_err(|e| host(format!("twv_sin_cos_pair: {e}")))?;
         Ok(Self {
             module,
             unary,
             binary,
+            sin_cos_pair,
         })
     }
 
@@ -299,6 +322,8 @@ impl Builder {
         let helpers = emit::Helpers {
             unary: self.module.declare_func_in_func(self.unary, b.func),
             binary: self.module.declare_func_in_func(self.binary, b.func),
+            sin_cos_pair: self.module.declare_func_in_func(self.sin_cos_pair, b.func),
+            pointer: self.module.target_config().pointer_type(),
         };
         let args = [params[0], params[1], params[2]];
         let mut sinks: emit::Sinks = vec![Vec::new(); function.n_values()];

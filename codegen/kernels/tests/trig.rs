@@ -212,11 +212,17 @@ fn paired_sin_cos_has_the_bits_of_the_scalar_one() {
             let (pa, pb) = sin_cos_pair(a, b);
             assert!(same(pa, a), "sin_cos_pair({a:e}, {b:e}): first");
             assert!(same(pb, b), "sin_cos_pair({a:e}, {b:e}): second");
-            if [a, b].iter().all(|x| (2f64.powi(-27)..=0.785).contains(&x.abs())) {
+            if [a, b]
+                .iter()
+                .all(|x| (2f64.powi(-27)..=0.785).contains(&x.abs()))
+            {
                 unreduced += 1;
             }
         }
     }
     // The two-lane path ran, not only the fallback.
-    assert!(unreduced > 10_000, "{unreduced} pairs in the unreduced range");
+    assert!(
+        unreduced > 10_000,
+        "{unreduced} pairs in the unreduced range"
+    );
 }
