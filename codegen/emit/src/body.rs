@@ -2,7 +2,7 @@
 //! its outputs.
 
 use proc_macro2::{Ident, Literal, TokenStream};
-use quote::{format_ident, quote, ToTokens};
+use quote::{format_ident, quote};
 use twv_ir::{Arg, BinaryOp, Function, Instr, Output, UnaryOp};
 
 use crate::Params;
@@ -73,15 +73,10 @@ fn angle_pairs(
         .paired_angles()
         .into_iter()
         .map(|pair| {
-            let [(sa, ea), (sb, eb)] = pair.map(|x| {
-                let expr = match f.instructions()[x] {
-                    Instr::Input { arg, index: i } => input(arg, i, params),
-                    _ => value(x).into_token_stream(),
-                };
-                (format_ident!("sc{}", x), expr)
-            });
-            paired.insert(pair[0], sa.clone());
-            paired.insert(pair[1], sb.clone());
+            let [(sa, ea), (sb, eb)] =
+                pair.map(|(x, arg, i)| (format_ident!("sc{}", x), input(arg, i, params)));
+            paired.insert(pair[0].0, sa.clone());
+            paired.insert(pair[1].0, sb.clone());
             quote!(let (#sa, #sb) = ::twv_kernels::trig::sin_cos_pair(#ea, #eb);)
         })
         .collect();

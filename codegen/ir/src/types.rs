@@ -223,22 +223,22 @@ impl Function {
     }
 
     /// The angles whose sines and cosines compiled code takes two at a time
-    /// (`twv_kernels::trig::sin_cos_pair`): value ids of states or inputs (so they exist before
-    /// any instruction) that a `sin` or `cos` reads, in order of first use, paired off; an odd
-    /// one out is left alone. The generated code and the JIT pair the same angles.
-    pub fn paired_angles(&self) -> Vec<[usize; 2]> {
-        let mut angles: Vec<usize> = Vec::new();
+    /// (`twv_kernels::trig::sin_cos_pair`): states or inputs (so they exist before any
+    /// instruction) that a `sin` or `cos` reads, in order of first use, paired off; an odd one
+    /// out is left alone. Each as (value id, argument, index). The generated code and the JIT
+    /// pair the same angles.
+    pub fn paired_angles(&self) -> Vec<[(usize, Arg, usize); 2]> {
+        let mut angles: Vec<(usize, Arg, usize)> = Vec::new();
         for instr in &self.instructions {
             if let Instr::Unary(UnaryOp::Sin | UnaryOp::Cos, x) = *instr {
-                let is_signal = matches!(
-                    self.instructions.get(x),
-                    Some(Instr::Input {
-                        arg: Arg::X | Arg::U,
-                        ..
-                    })
-                );
-                if is_signal && !angles.contains(&x) {
-                    angles.push(x);
+                if let Some(&Instr::Input {
+                    arg: arg @ (Arg::X | Arg::U),
+                    index,
+                }) = self.instructions.get(x)
+                {
+                    if !angles.iter().any(|a| a.0 == x) {
+                        angles.push((x, arg, index));
+                    }
                 }
             }
         }

@@ -83,13 +83,9 @@ fn sin_cos_pairs(
 ) -> std::collections::BTreeMap<usize, (Value, Value)> {
     let mut paired = std::collections::BTreeMap::new();
     for pair in function.paired_angles() {
-        let [a, c] = pair.map(|x| match function.instructions()[x] {
-            Instr::Input { arg, index } => {
-                b.ins()
-                    .load(types::F64, MEMORY, args[arg.number()], offset(index))
-            }
-            // `paired_angles` pairs inputs only.
-            _ => b.ins().f64const(f64::NAN),
+        let [a, c] = pair.map(|(_, arg, index)| {
+            b.ins()
+                .load(types::F64, MEMORY, args[arg.number()], offset(index))
         });
         let slot =
             b.create_sized_stack_slot(StackSlotData::new(StackSlotKind::ExplicitSlot, 32, 3));
@@ -97,8 +93,8 @@ fn sin_cos_pairs(
         b.ins().call(helpers.sin_cos_pair, &[a, c, out]);
         let [sa, ca, sc, cc] =
             [0, 1, 2, 3].map(|i| b.ins().load(types::F64, MEMORY, out, offset(i)));
-        paired.insert(pair[0], (sa, ca));
-        paired.insert(pair[1], (sc, cc));
+        paired.insert(pair[0].0, (sa, ca));
+        paired.insert(pair[1].0, (sc, cc));
     }
     paired
 }
