@@ -378,3 +378,38 @@ impl Ir {
         self.output("jac_x", "jac_x")
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// States and inputs pair off in order of first use; an angle that is computed, a
+    /// parameter, or the odd one out is not paired.
+    #[test]
+    fn paired_angles_are_states_and_inputs_in_order_of_first_use() {
+        let x = |index| Instr::Input { arg: Arg::X, index };
+        let f = Function {
+            instructions: vec![
+                x(3),                          // 0: theta
+                Instr::Unary(UnaryOp::Cos, 0), // 1
+                Instr::Input {
+                    arg: Arg::P,
+                    index: 0,
+                }, // 2: a parameter
+                Instr::Unary(UnaryOp::Sin, 2), // 3
+                x(0),                          // 4: phi
+                Instr::Binary(BinaryOp::Add, 0, 4), // 5: computed
+                Instr::Unary(UnaryOp::Sin, 5), // 6
+                Instr::Unary(UnaryOp::Sin, 4), // 7
+                Instr::Unary(UnaryOp::Sin, 0), // 8: theta again
+                Instr::Input {
+                    arg: Arg::U,
+                    index: 1,
+                }, // 9: an input
+                Instr::Unary(UnaryOp::Cos, 9), // 10: the odd one out
+            ],
+            outputs: vec![],
+        };
+        assert_eq!(f.paired_angles(), [[(0, Arg::X, 3), (4, Arg::X, 0)]]);
+    }
+}
