@@ -311,23 +311,38 @@ pub fn jw_rows(jac: &Output) -> TokenStream {
             .reduce(|acc, t| quote!(#acc + #t))
             .unwrap_or_else(|| quote!(0.0))
     });
-    let lanes = stored.iter().map(|row| {
-        row.iter()
-            .map(|&(c, e)| {
-                let (c, e) = (index(c), index(e));
-                quote!(B::mul([j[#e]; ::twv_kernels::lanes::LANES], wl[#c]))
-            })
-            .reduce(|acc, t| quote!(B::add(#acc, #t)))
-            .unwrap_or_else(lane_zero)
-    });
+    let lanes = stored
+        .iter()
+        .map(|row| {
+            row.iter()
+                .map(|&(c, e)| {
+                    let (c, e) = (index(c), index(e));
+                    quote!(B::mul([j[#e]; ::twv_kernels::lanes::LANES], wl[#c]))
+                })
+                .reduce(|acc, t| quote!(B::add(#acc, #t)))
+                .unwrap_or_else(lane_zero)
+        })
+        .collect::<Vec<_>>();
     quote! {
         let count = w.len().min(out.len());
         let grouped = ::twv_kernels::tangents::in_groups::<B>(count);
         let (w_groups, _) = w[..grouped].as_chunks::<{ ::twv_kernels::lanes::LANES }>();
         let (out_groups, _) = out[..grouped].as_chunks_mut::<{ ::twv_kernels::lanes::LANES }>();
-        for (wg, og) in w_groups.iter().zip(out_groups) {
+        // The first group outside the loop: written out once more, it is straight-line code
+        // after ∂f/∂x, where the entries' splats are not hoisted out of a loop and spilled
+        // (f_jw with K = 8, the Lyapunov spectra's case: 0.60–0.61× the hand formulation's C
+        // against 0.61–0.65 with the loop alone, four alternating runs).
+        let mut groups = w_groups.iter().zip(out_groups);
+        if let Some((wg, og)) = groups.next() {
             // SAFETY: `B` is the build this body is compiled into, which runs only where the
             // CPU has its instructions (`multiversion`).
+            unsafe {
+                let wl = B::gather(wg);
+                B::scatter(&[#(#lanes),*], og);
+            }
+        }
+        for (wg, og) in groups {
+            // SAFETY: as above.
             unsafe {
                 let wl = B::gather(wg);
                 B::scatter(&[#(#lanes),*], og);
