@@ -151,9 +151,9 @@ mod tests {
         assert_eq!(back, matrices);
     }
 
-    /// The wide gathers and scatters (transposes of registers, masked at the end of a row) are
-    /// [`gather`] and [`scatter`], for rows shorter than, equal to and longer than a register,
-    /// for each build this CPU can run.
+    /// The wide gathers and the AVX2 scatter (transposes of registers, masked at the end of a
+    /// row) are [`gather`] and [`scatter`], for rows shorter than, equal to and longer than a
+    /// register, for each build this CPU can run.
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn wide_gathers_and_scatters_are_the_definitions() {
@@ -161,18 +161,14 @@ mod tests {
             let rows: [[f64; N]; LANES] =
                 core::array::from_fn(|l| core::array::from_fn(|i| (10 * l + i) as f64 - 0.5));
             let reference = gather(&rows);
-            let mut back = [[f64::NAN; N]; LANES];
             if crate::isa::best() >= crate::isa::Isa::Avx512 {
                 // SAFETY: the CPU has AVX-512F and AVX-512VL.
                 assert_eq!(unsafe { wide::gather(&rows) }, reference);
-                // SAFETY: as above.
-                unsafe { wide::scatter(&reference, &mut back) };
-                assert_eq!(back, rows);
             }
             if crate::isa::best() >= crate::isa::Isa::Avx2 {
                 // SAFETY: the CPU has AVX2.
                 assert_eq!(unsafe { wide_avx2::gather(&rows) }, reference);
-                back = [[f64::NAN; N]; LANES];
+                let mut back = [[f64::NAN; N]; LANES];
                 // SAFETY: as above.
                 unsafe { wide_avx2::scatter(&reference, &mut back) };
                 assert_eq!(back, rows);
@@ -292,28 +288,6 @@ pub mod wide {
             }
         }
         out
-    }
-
-    /// [`super::scatter`] by 8×8 transposes of registers, each row written 8 entries at a time
-    /// (the last piece masked).
-    ///
-    /// # Safety
-    /// The CPU must have AVX-512F and AVX-512VL.
-    #[target_feature(enable = "avx512f,avx512vl")]
-    #[inline]
-    pub fn scatter<const N: usize>(lanes: &[Lanes; N], rows: &mut [[f64; N]; LANES]) {
-        for start in (0..N).step_by(LANES) {
-            let mask = first((N - start).min(LANES));
-            let mut c = [_mm512_setzero_pd(); LANES];
-            for (c, lanes) in c.iter_mut().zip(&lanes[start..]) {
-                // SAFETY: an unaligned load of 8 doubles from an array of 8.
-                *c = unsafe { _mm512_loadu_pd(lanes.as_ptr()) };
-            }
-            for (row, v) in rows.iter_mut().zip(transpose(c)) {
-                // SAFETY: a masked store of entries start.. < N of an array of N.
-                unsafe { _mm512_mask_storeu_pd(row.as_mut_ptr().add(start), mask, v) };
-            }
-        }
     }
 
     /// (sin, cos) of every lane with the bits of [`crate::trig::sin_cos`], all lanes in one

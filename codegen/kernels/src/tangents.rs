@@ -82,11 +82,11 @@ unsafe impl Build for Baseline {
     }
 }
 
-/// `Build` for a wide build through the functions of its `lanes` module (`wide`,
-/// `wide_avx2`), or lane by lane where the target is not x86-64 (where these builds never run).
+/// `Build` for a wide build through `lanes::wide_avx2` (4-wide registers, see below), or lane
+/// by lane where the target is not x86-64 (where these builds never run).
 macro_rules! wide_build {
-    ($build:ty, $module:ident) => {
-        // SAFETY: the module's functions are exact lane-wise IEEE operations and data moves
+    ($build:ty) => {
+        // SAFETY: `wide_avx2`'s functions are exact lane-wise IEEE operations and data moves
         // (tested against the scalar definitions in `lanes`).
         unsafe impl Build for $build {
             const WIDE: bool = cfg!(target_arch = "x86_64");
@@ -95,7 +95,7 @@ macro_rules! wide_build {
             unsafe fn add(a: Lanes, b: Lanes) -> Lanes {
                 #[cfg(target_arch = "x86_64")]
                 // SAFETY: the caller's promise that the CPU runs this build.
-                return unsafe { crate::lanes::$module::add(a, b) };
+                return unsafe { crate::lanes::wide_avx2::add(a, b) };
                 #[cfg(not(target_arch = "x86_64"))]
                 // SAFETY: scalar operations.
                 return unsafe { Baseline::add(a, b) };
@@ -105,7 +105,7 @@ macro_rules! wide_build {
             unsafe fn mul(a: Lanes, b: Lanes) -> Lanes {
                 #[cfg(target_arch = "x86_64")]
                 // SAFETY: the caller's promise that the CPU runs this build.
-                return unsafe { crate::lanes::$module::mul(a, b) };
+                return unsafe { crate::lanes::wide_avx2::mul(a, b) };
                 #[cfg(not(target_arch = "x86_64"))]
                 // SAFETY: scalar operations.
                 return unsafe { Baseline::mul(a, b) };
@@ -115,7 +115,7 @@ macro_rules! wide_build {
             unsafe fn gather<const N: usize>(rows: &[[f64; N]; LANES]) -> [Lanes; N] {
                 #[cfg(target_arch = "x86_64")]
                 // SAFETY: the caller's promise that the CPU runs this build.
-                return unsafe { crate::lanes::$module::gather(rows) };
+                return unsafe { crate::lanes::wide_avx2::gather(rows) };
                 #[cfg(not(target_arch = "x86_64"))]
                 return crate::lanes::gather(rows);
             }
@@ -124,7 +124,7 @@ macro_rules! wide_build {
             unsafe fn scatter<const N: usize>(lanes: &[Lanes; N], rows: &mut [[f64; N]; LANES]) {
                 #[cfg(target_arch = "x86_64")]
                 // SAFETY: the caller's promise that the CPU runs this build.
-                return unsafe { crate::lanes::$module::scatter(lanes, rows) };
+                return unsafe { crate::lanes::wide_avx2::scatter(lanes, rows) };
                 #[cfg(not(target_arch = "x86_64"))]
                 return crate::lanes::scatter(lanes, rows);
             }
@@ -132,12 +132,12 @@ macro_rules! wide_build {
     };
 }
 
-wide_build!(Avx2, wide_avx2);
+wide_build!(Avx2);
 // The AVX-512 build's J·W also works on 4-wide registers: on the Intel Xeon this was measured
 // on, vehicle8's f_jw (K = 8) took 73 ns with 8-wide registers and 65 ns with 4-wide ones (the
 // 8-wide transposes and products cost more than twice the 4-wide); on Zen 4, which splits an
 // 8-wide operation into two 4-wide ones, the width makes no difference.
-wide_build!(Avx512, wide_avx2);
+wide_build!(Avx512);
 
 /// How many of the `count` tangent vectors build `B` takes in groups of [`LANES`] (the rest go
 /// one by one).
