@@ -18,7 +18,7 @@
 
 use nalgebra::SMatrix;
 
-use crate::integrate::{Projected, VectorField};
+use crate::integrate::{project, Projected, VectorField};
 
 /// The largest change of a point's λ1 [1/s] the shortcut is allowed, against the same point
 /// run step by step to the end (checked by the tests and the map benchmark).
@@ -38,13 +38,8 @@ pub(super) fn at_rest<F: VectorField<N>, const N: usize>(
     }
     let mut f = [0.0; N];
     field.rhs(t, x, &mut f);
-    let speed = f
-        .iter()
-        .zip(&field.keep)
-        .filter(|(_, k)| **k)
-        .map(|(v, _)| v * v)
-        .sum::<f64>()
-        .sqrt();
+    project(&field.keep, &mut f);
+    let speed = f.iter().map(|v| v * v).sum::<f64>().sqrt();
     speed <= distance * -rate
 }
 
