@@ -261,12 +261,7 @@ fn main() -> ExitCode {
         "closed-loop stage kernel (f, J·w for one w, ∂f/∂u): one point per call {one} ns; \
          {L} lanes per call, each build this CPU can run:"
     );
-    for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
-        if best() < isa {
-            println!("  {}: not run (this CPU lacks it)", isa.name());
-            continue;
-        }
-        force(isa);
+    each_build(|isa| {
         let t = lanes();
         println!(
             "  {}: {t} ns ({:.1} ns per point, {:.2}× one point per call)",
@@ -274,8 +269,7 @@ fn main() -> ExitCode {
             t.median / L as f64,
             one.median * L as f64 / t.median
         );
-    }
-    force(Isa::Avx512);
+    });
 
     // The Lyapunov floor: an RK4 stage cannot start before the previous stage's f is known, so
     // the study preset (10 s at h = 1e-3: 40 000 stages) costs at least 40 000 times the
@@ -283,11 +277,7 @@ fn main() -> ExitCode {
     // f_jw, whatever the integrator around it does.
     println!();
     println!("dependent chains (each call waits for the previous result), runtime parameters:");
-    for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
-        if force(isa) != isa {
-            println!("  {} build: not run, this CPU lacks it", isa.name());
-            continue;
-        }
+    each_build(|isa| {
         let mut x = pt.x;
         let f_latency = time(plan, || {
             let mut f = [0.0; NX];
@@ -310,7 +300,21 @@ fn main() -> ExitCode {
                 stats.median * 40_000.0 / 1e6
             );
         }
+    });
+    ExitCode::SUCCESS
+}
+
+/// Runs `body` with each build of the kernels this CPU can run in force, best first (naming
+/// those it cannot), and leaves the best one in force.
+fn each_build(mut body: impl FnMut(twv_kernels::isa::Isa)) {
+    use twv_kernels::isa::{best, force, Isa};
+    for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
+        if best() < isa {
+            println!("  {}: not run (this CPU lacks it)", isa.name());
+            continue;
+        }
+        force(isa);
+        body(isa);
     }
     force(Isa::Avx512);
-    ExitCode::SUCCESS
 }
