@@ -40,6 +40,16 @@ def cli_json(*args: str, cwd: Path | None = None, flag: bool = True) -> dict:
     return json.loads(out.stdout)
 
 
+def cli_shard(out: Path, *args: str) -> dict:
+    """`twv sweep ARGS --out OUT --quiet` run as one shard, its shard file parsed."""
+    subprocess.run(
+        [str(twv_binary()), "sweep", *args, "--out", str(out), "--quiet"],
+        check=True,
+        timeout=300,
+    )
+    return json.loads((out / "shard-0-of-1.json").read_text())
+
+
 @pytest.fixture(scope="session")
 def vehicle8() -> twv.Model:
     return twv.Model("vehicle8")

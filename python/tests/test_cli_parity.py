@@ -3,11 +3,9 @@ numbers are shortest round-trip decimals, so equal dicts mean equal doubles)."""
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
-from conftest import REPO, cli_json, twv_binary
+from conftest import REPO, cli_json, cli_shard
 
 import twv
 
@@ -169,29 +167,13 @@ def test_the_bicycles_speed_sweep():
 
 
 def test_sweep_equals_the_shard_file(vehicle8, tmp_path):
-    import subprocess
-
     points = {}
     for full in (False, True):
-        out = tmp_path / ("full" if full else "tail")
-        subprocess.run(
-            [
-                str(twv_binary()),
-                "sweep",
-                "--kp",
-                "0:8000:6",
-                "--kd",
-                "0:4000:5",
-                "--metric",
-                "max-lyapunov",
-                "--out",
-                str(out),
-                "--quiet",
-                *(["--full-horizon"] if full else []),
-            ],
-            check=True,
+        shard = cli_shard(
+            tmp_path / ("full" if full else "tail"),
+            *("--kp", "0:8000:6", "--kd", "0:4000:5", "--metric", "max-lyapunov"),
+            *(["--full-horizon"] if full else []),
         )
-        shard = json.loads((out / "shard-0-of-1.json").read_text())
         py = twv.sweep(
             vehicle8, kp=(0, 8000, 6), kd=(0, 4000, 5), metric="max-lyapunov", full_horizon=full
         )
@@ -223,27 +205,11 @@ def test_the_uncontrolled_bicycle_rides():
 
 
 def test_a_sweep_over_parameters_equals_the_shard_file(vehicle8, tmp_path):
-    import subprocess
-
-    subprocess.run(
-        [
-            str(twv_binary()),
-            "sweep",
-            "--kp",
-            "0:4000:9",
-            "--param",
-            "m2=4:20:3",
-            "--param",
-            "b=0.3:0.9:2",
-            "--metric",
-            "spectral-abscissa",
-            "--out",
-            str(tmp_path),
-            "--quiet",
-        ],
-        check=True,
+    shard = cli_shard(
+        tmp_path,
+        *("--kp", "0:4000:9", "--param", "m2=4:20:3", "--param", "b=0.3:0.9:2"),
+        *("--metric", "spectral-abscissa"),
     )
-    shard = json.loads((tmp_path / "shard-0-of-1.json").read_text())
     py = twv.sweep(
         vehicle8,
         kp=(0, 4000, 9),
