@@ -146,12 +146,12 @@ struct Run<const NA: usize> {
 
 impl<const NA: usize> Run<NA> {
     /// The run of point `point` (loop `lp`) from `x0`, or how it ends before its first step:
-    /// an invalid step or a non-finite start blows up, invalid settings fail, as in the
-    /// Benettin driver.
+    /// an invalid step or a non-finite start blows up, invalid settings (`settings_ok` false,
+    /// the drive's one check of `lyapunov_settings(s)`) fail, as in the Benettin driver.
     fn start<M, const NX: usize, const NU: usize>(
         lp: &PidLoop<'_, M, NX, NU, NA>,
         x0: &[f64; NX],
-        s: &MetricSettings,
+        (s, settings_ok): (&MetricSettings, bool),
         ends: &IntervalEnds,
         point: usize,
     ) -> Result<Self, Status>
@@ -162,7 +162,7 @@ impl<const NA: usize> Run<NA> {
         if !(s.h.is_finite() && s.h > 0.0) || start.non_finite_part().is_some() {
             return Err(Status::BlewUp);
         }
-        if lyapunov_settings(s).validate().is_err() {
+        if !settings_ok {
             return Err(Status::Failed);
         }
         let mut run = Self {
@@ -293,6 +293,7 @@ where
     M: Model<NX, NU>,
 {
     let ends = IntervalEnds::new(0.0, s.transient, s.t_sample, s.iterations);
+    let settings_ok = lyapunov_settings(s).validate().is_ok();
     let mut results: Vec<Option<PointResult>> = vec![None; loops.len()];
     let finish = |results: &mut Vec<Option<PointResult>>, point: usize, end: End| {
         let g = loops[point].settings().pitch.gains;
@@ -312,7 +313,7 @@ where
             while runs[l].is_none() && next < loops.len() {
                 let point = next;
                 next += 1;
-                match Run::start(&loops[point], x0, s, &ends, point) {
+                match Run::start(&loops[point], x0, (s, settings_ok), &ends, point) {
                     Ok(run) => {
                         group.set(l, loops[point]);
                         (y[l], parked[l]) = (run.start, run.start);
