@@ -360,8 +360,7 @@ impl Builder {
                     // Any size: they go to a stack array as soon as they exist, and the loop
                     // reads them back.
                     None => {
-                        let pointer = self.module.target_config().pointer_type();
-                        let array = emit::entry_sinks(&mut b, &mut sinks, jac, pointer);
+                        let array = emit::entry_sinks(&mut b, &mut sinks, jac, helpers.pointer);
                         emit::values(&mut b, &helpers, function, args, &sinks);
                         // Only the diagonal is read back for the trace.
                         let unused = b.ins().f64const(0.0);
