@@ -54,6 +54,9 @@ pub(crate) const KP: usize = 0;
 impl Design {
     /// Lays the grid (`points_per_decade` over [1e-3, 1e3] ω_ref, widened to 30/τ and 30/T,
     /// plus DC for PD) and the gain scales s_j = 1/|φ_j(jω_ref)|, ω_ref the largest plant pole.
+    /// An undamped plant (a pendulum hanging below its hinge) can have that pole on the
+    /// imaginary axis, where φ_j is infinite: the scales then come from 2ω_ref or ω_ref/2
+    /// (they only condition the problem; any frequency off the poles serves).
     pub fn new(
         lp: &PitchLoop,
         opts: &LoopOptions,
@@ -69,7 +72,9 @@ impl Design {
             .map(|p| p.norm())
             .fold(0.0, f64::max);
         let w_ref = if w_ref > 0.0 { w_ref } else { 1.0 };
-        let b_ref = lp.gain_basis(0.0, w_ref)?;
+        let b_ref = [1.0, 2.0, 0.5]
+            .iter()
+            .find_map(|k| lp.gain_basis(0.0, k * w_ref))?;
         let scale = [
             1.0 / b_ref.p.norm(),
             1.0 / b_ref.i?.norm(),

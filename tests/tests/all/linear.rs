@@ -431,6 +431,27 @@ fn tuned_pd_meets_dpm_45_by_the_independent_check() {
     );
 }
 
+/// Φ̈ = −4 Φ − F (a pendulum hanging below its hinge, undamped; the base's force tilts it
+/// back, as in the study's vehicle): its poles ±2j lie exactly on the tuner's reference
+/// frequency, where the plant is infinite; the gain scales come from another frequency and the
+/// design proceeds.
+#[test]
+fn an_undamped_pole_at_the_reference_frequency_still_tunes() {
+    let a = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -4.0, 0.0]);
+    let b = DMatrix::from_row_slice(2, 1, &[0.0, -1.0]);
+    let states = ["phi".to_string(), "w_y".to_string()];
+    let lp = PitchLoop::new(&a, &b, &[1.0], &states).unwrap();
+    assert!(
+        lp.gain_basis(0.0, 2.0).is_none(),
+        "the plant is infinite at its pole"
+    );
+    let spec: Spec = "dpm>=45".parse().unwrap();
+    let res = tune(&lp, &spec, &TuneOptions::default()).unwrap();
+    assert_eq!(res.status, TuneStatus::Solved, "{res:?}");
+    let g = res.certificate.as_ref().unwrap().gains;
+    check_independently(&lp, &g, &LoopOptions::default(), 45.0);
+}
+
 #[test]
 fn tuned_pid_with_actuator_lag_and_delay_meets_its_spec() {
     let lp = pitch_loop();
