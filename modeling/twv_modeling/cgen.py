@@ -15,16 +15,9 @@ from pathlib import Path
 
 import casadi as ca
 
-from .derived import DerivedModel
+from .derived import DerivedModel, operations
 
 TANGENTS = 8
-
-
-def operations(fn: ca.Function) -> int:
-    """The arithmetic operations of a CasADi function after CSE (its instructions less inputs,
-    outputs and constants): the count both exports are compared by."""
-    skip = {ca.OP_INPUT, ca.OP_OUTPUT, ca.OP_CONST}
-    return sum(fn.instruction_id(k) not in skip for k in range(fn.n_instructions()))
 
 
 def export_c(model: DerivedModel, out_dir: Path, f: ca.SX | None = None, tag: str = "") -> Path:
@@ -34,13 +27,13 @@ def export_c(model: DerivedModel, out_dir: Path, f: ca.SX | None = None, tag: st
     x, u, p = model.x, model.u, model.p
     own = f is None
     f = model.expressions["f"] if own else f
-    jac = ca.jacobian(f, x)
+    jac = model.jacobian_x() if own else ca.jacobian(f, x)
     W = ca.SX.sym("W", x.numel(), TANGENTS)
     jw = ca.mtimes(jac, W)
     if not own:
         # The derivation's sparsity for the ∂f/∂x output (extra entries are zeros), so both
         # exports are read alike; J·W keeps this f's own, sparser Jacobian.
-        jac = ca.project(jac, ca.jacobian(model.expressions["f"], x).sparsity())
+        jac = ca.project(jac, model.jacobian_x().sparsity())
     defaults = ca.DM([prm.default for prm in model.params])
     baked = ca.substitute([f, jac, jw], [p], [defaults])
     opts = {"cse": True}

@@ -155,7 +155,7 @@ def build_ir(model: DerivedModel) -> dict:
     check_casadi_version()
     x, u, p = model.x, model.u, model.p
     f = model.expressions["f"]
-    jac_x, jac_u = ca.jacobian(f, x), ca.jacobian(f, u)
+    jac_x, jac_u = model.jacobian_x(), ca.jacobian(f, u)
     args = [x, u, p]
     functions = {
         "f": export_function("f", args, [("f", f)]),

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from .canonical import canonical
-from .derived import DerivedModel, Signal
+from .derived import DerivedModel, Signal, operations
 from .kinematics import (
     Body,
     PlanarJoint,
@@ -424,14 +424,16 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
     p_ind = p_new[:m]
     rows = [coord_names.index(c) for c in state_coords]
     qdot_state = ca.vertcat(*[qdot[r] for r in rows])
-    pdot = solve_spd(M, canonical(ca.cse(Q - Cp - F), params, env))
+    rhs = canonical(ca.cse(Q - Cp - F), params, env)
+    pdot = solve_spd(M, rhs)
     x = ca.vertcat(*[q[c] for c in state_coords], p_ind)
+    f = ca.vertcat(qdot_state, pdot)
 
     states = [c for c in system.coordinates if c.name in state_coords] + [
         s for s in system.speeds if s.name in independent
     ]
     expressions = {
-        "f": ca.vertcat(qdot_state, pdot),
+        "f": f,
         "M": M,
         "Cp": Cp,
         "F": F,
@@ -453,6 +455,7 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
         u=u_vec,
         p=p_vec,
         expressions=expressions,
+        jac_x=_jacobian_x(f, x, [x, u_vec, p_vec], M, rhs, len(state_coords)),
         header={
             "coordinates": state_coords,
             "ignorable_coordinates": rotor_coords,
@@ -597,3 +600,26 @@ def _transform_structure(gamma, Tmat, Tinv, n):
                     acc = acc + Tinv[f, e] * val * Tmat[b, a] * Tmat[d, c]
                 out[f][a][c] = acc
     return out
+
+
+def _jacobian_x(
+    f: ca.SX, x: ca.SX, args: list[ca.SX], M: ca.SX, rhs: ca.SX, n_coords: int
+) -> ca.SX:
+    """∂f/∂x for f = (q̇, M⁻¹ rhs): CasADi's differentiation of f, or the derivative through
+    the inverse, ∂ṗ/∂x = M⁻¹ (∂rhs/∂x − ∂M/∂x · ṗ), which reuses the solve of f (with the
+    closed-form 2x2 inverse: its one reciprocal determinant) — whichever has fewer operations
+    together with f. The second has the first's sparsity (an entry the differentiation finds
+    structurally zero is identically zero)."""
+    by_differentiation = ca.jacobian(f, x)
+    pdot = f[n_coords:]
+    held = ca.SX.sym("held", pdot.numel())
+    dM_pdot = ca.substitute(ca.jacobian(M @ held, x), held, ca.densify(pdot))
+    through_inverse = ca.vertcat(
+        ca.jacobian(f[:n_coords], x), solve_spd(M, ca.jacobian(rhs, x) - dM_pdot)
+    )
+    through_inverse = ca.project(through_inverse, by_differentiation.sparsity())
+
+    def cost(jac: ca.SX) -> int:
+        return operations(ca.Function("f_jac_x", args, [f, jac], {"cse": True}))
+
+    return min((through_inverse, by_differentiation), key=cost)
