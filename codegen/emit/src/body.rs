@@ -229,9 +229,9 @@ fn binary(op: BinaryOp, a: &Ident, b: &Ident) -> TokenStream {
     }
 }
 
-/// The dense matrix of an output as rows of expressions (`vK` or `0.0`).
+/// The dense matrix of an output as rows of expressions (`vK`, or an opaque zero: `twv_kernels::zero`).
 pub fn dense(o: &Output) -> Vec<Vec<TokenStream>> {
-    dense_with(o, quote!(0.0))
+    dense_with(o, quote!(::twv_kernels::zero::zero()))
 }
 
 /// The dense matrix of an output with `zero` at the structural zeros.
