@@ -362,16 +362,14 @@ pub mod wide {
                 mul(v, f(S1)),
             ),
         );
-        let without_tail = add(y0, mul(v, add(f(S1), mul(z, r))));
+        let without_tail = add(y0, mul(v, estrin!(add, mul, f, z, w, SIN_POLY)));
         let s = _mm512_mask_blend_pd(small, with_tail, without_tail);
         // `kernel_cos`.
-        let r = add(
-            mul(z, add(f(C1), mul(z, add(f(C2), mul(z, f(C3)))))),
-            mul(mul(w, w), add(f(C4), mul(z, add(f(C5), mul(z, f(C6)))))),
-        );
+        let q = estrin!(add, mul, f, z, w, COS_POLY);
         let hz = mul(f(0.5), z);
+        let wq = mul(w, q);
         let w = sub(f(1.0), hz);
-        let c = add(w, add(sub(sub(f(1.0), w), hz), sub(mul(z, r), mul(y0, y1))));
+        let c = add(w, add(sub(sub(f(1.0), w), hz), sub(wq, mul(y0, y1))));
 
         // Quadrant: 0 (s, c), 1 (c, −s), 2 (−s, −c), 3 (−c, s); tiny |x|: (x, 1).
         let odd = _mm512_test_epi64_mask(quadrant, i(1));
@@ -682,16 +680,14 @@ pub mod wide_avx2 {
                 mul(v, f(S1)),
             ),
         );
-        let without_tail = add(y0, mul(v, add(f(S1), mul(z, r))));
+        let without_tail = add(y0, mul(v, estrin!(add, mul, f, z, w, SIN_POLY)));
         let s = select(small, with_tail, without_tail);
         // `kernel_cos`.
-        let r = add(
-            mul(z, add(f(C1), mul(z, add(f(C2), mul(z, f(C3)))))),
-            mul(mul(w, w), add(f(C4), mul(z, add(f(C5), mul(z, f(C6)))))),
-        );
+        let q = estrin!(add, mul, f, z, w, COS_POLY);
         let hz = mul(f(0.5), z);
+        let wq = mul(w, q);
         let w = sub(f(1.0), hz);
-        let c = add(w, add(sub(sub(f(1.0), w), hz), sub(mul(z, r), mul(y0, y1))));
+        let c = add(w, add(sub(sub(f(1.0), w), hz), sub(wq, mul(y0, y1))));
 
         // Quadrant: 0 (s, c), 1 (c, −s), 2 (−s, −c), 3 (−c, s); tiny |x|: (x, 1).
         let odd = _mm256_cmpeq_epi64(_mm256_and_si256(quadrant, i(1)), i(1));
