@@ -390,22 +390,17 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
             let xs = wide::gather(x_lanes);
             let us = wide::gather(u_lanes);
             #fj_body
-            wide::scatter(&#fj_f, f_lanes);
+            ::twv_kernels::lanes::scatter(&#fj_f, f_lanes);
             let wl = wide::gather(w_lanes);
-            wide::scatter(&#jw, out_lanes);
+            ::twv_kernels::lanes::scatter(&#jw, out_lanes);
             {
                 #ju_body
-                wide::scatter_matrix(&#ju_out, jac_u_lanes);
+                ::twv_kernels::lanes::scatter_matrix(&#ju_out, jac_u_lanes);
             }
         }
     };
     let avx512 = body(quote!(::twv_kernels::lanes::wide));
-    // One pass per half of the lanes (`lanes::wide_avx2::low`, `high`): 16 registers.
-    let (avx2_low, avx2_high) = (
-        body(quote!(::twv_kernels::lanes::wide_avx2::low)),
-        body(quote!(::twv_kernels::lanes::wide_avx2::high)),
-    );
-    let avx2 = quote!({ #avx2_low } { #avx2_high });
+    let avx2 = body(quote!(::twv_kernels::lanes::wide_avx2));
     Ok(quote! {
         /// [`Self::kernel_variational`] with one tangent vector and ∂f/∂u at `LANES` points
         /// (`x_lanes[l]`, … → `f_lanes[l]`, …): one AVX-512 (or AVX2) instruction stream for all

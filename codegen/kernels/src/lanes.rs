@@ -106,17 +106,7 @@ pub fn scatter_matrix<const R: usize, const C: usize>(
     lanes: &[[Lanes; C]; R],
     out: &mut [[[f64; C]; R]; LANES],
 ) {
-    scatter_matrix_lanes(lanes, out, 0..LANES);
-}
-
-/// [`scatter_matrix`] of the lanes in `range` (the other matrices are not written).
-#[inline(always)]
-pub(crate) fn scatter_matrix_lanes<const R: usize, const C: usize>(
-    lanes: &[[Lanes; C]; R],
-    out: &mut [[[f64; C]; R]; LANES],
-    range: core::ops::Range<usize>,
-) {
-    for (l, matrix) in out.iter_mut().enumerate().take(range.end).skip(range.start) {
+    for (l, matrix) in out.iter_mut().enumerate() {
         let matrix = core::hint::black_box(matrix);
         for (row, lanes_row) in matrix.iter_mut().zip(lanes) {
             for (v, lane) in row.iter_mut().zip(lanes_row) {
@@ -182,25 +172,6 @@ mod tests {
                 // SAFETY: as above.
                 unsafe { wide_avx2::scatter(&reference, &mut back) };
                 assert_eq!(back, rows);
-                // The half passes: each gathers and scatters its own four lanes only.
-                let mut back = [[f64::NAN; N]; LANES];
-                // SAFETY: as above.
-                let (low, high) = unsafe {
-                    (
-                        wide_avx2::low::gather(&rows),
-                        wide_avx2::high::gather(&rows),
-                    )
-                };
-                for (i, (low, high)) in low.iter().zip(&high).enumerate() {
-                    assert_eq!(low[..4], reference[i][..4]);
-                    assert_eq!(high[4..], reference[i][4..]);
-                }
-                // SAFETY: as above.
-                unsafe { wide_avx2::low::scatter(&reference, &mut back) };
-                assert!(back[4..].iter().flatten().all(|v| v.is_nan()));
-                // SAFETY: as above.
-                unsafe { wide_avx2::high::scatter(&reference, &mut back) };
-                assert_eq!(back, rows);
             }
         }
         check::<1>();
@@ -220,8 +191,6 @@ mod tests {
 pub mod wide {
     use super::{Lanes, LANES};
     use core::arch::x86_64::*;
-
-    pub use super::{scatter, scatter_matrix};
 
     macro_rules! op {
         ($name:ident, $intr:ident) => {
@@ -438,11 +407,9 @@ pub mod wide_avx2 {
     /// Half a lane array.
     const HALF: usize = LANES / 2;
 
-    /// `$name(a, b)`: the operation on the lanes of the halves starting at `$halves` (the
-    /// others 0.0).
     macro_rules! op {
-        ($name:ident, $intr:ident, $halves:expr) => {
-            /// The operation on every lane (of this half).
+        ($name:ident, $intr:ident) => {
+            /// The operation on every lane.
             ///
             /// # Safety
             /// The CPU must have AVX2.
@@ -453,7 +420,7 @@ pub mod wide_avx2 {
                 // SAFETY: unaligned loads and stores of 4 doubles at offsets 0 and 4 of arrays
                 // of 8.
                 unsafe {
-                    for h in $halves {
+                    for h in [0, HALF] {
                         let r = $intr(
                             _mm256_loadu_pd(a.as_ptr().add(h)),
                             _mm256_loadu_pd(b.as_ptr().add(h)),
@@ -465,10 +432,10 @@ pub mod wide_avx2 {
             }
         };
     }
-    op!(add, _mm256_add_pd, [0, HALF]);
-    op!(sub, _mm256_sub_pd, [0, HALF]);
-    op!(mul, _mm256_mul_pd, [0, HALF]);
-    op!(div, _mm256_div_pd, [0, HALF]);
+    op!(add, _mm256_add_pd);
+    op!(sub, _mm256_sub_pd);
+    op!(mul, _mm256_mul_pd);
+    op!(div, _mm256_div_pd);
 
     /// The 4×4 transpose of four registers, `out[i][l] = rows[l][i]`.
     #[target_feature(enable = "avx2")]
@@ -580,24 +547,17 @@ pub mod wide_avx2 {
     #[inline]
     pub fn scatter<const N: usize>(lanes: &[Lanes; N], rows: &mut [[f64; N]; LANES]) {
         for h in [0, HALF] {
-            scatter_half(lanes, h, rows);
-        }
-    }
-
-    /// Lanes `h..h + 4` of [`scatter`].
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn scatter_half<const N: usize>(lanes: &[Lanes; N], h: usize, rows: &mut [[f64; N]; LANES]) {
-        for start in (0..N).step_by(HALF) {
-            let n = (N - start).min(HALF);
-            let mut c = [_mm256_setzero_pd(); HALF];
-            for (c, lanes) in c.iter_mut().zip(&lanes[start..]) {
-                // SAFETY: entries h..h + 4 ≤ 8 of an array of 8.
-                *c = unsafe { load(lanes.as_ptr().add(h), HALF) };
-            }
-            for (row, v) in rows[h..].iter_mut().zip(transpose(c)) {
-                // SAFETY: entries start..start + n ≤ N of an array of N.
-                unsafe { store(row.as_mut_ptr().add(start), n, v) };
+            for start in (0..N).step_by(HALF) {
+                let n = (N - start).min(HALF);
+                let mut c = [_mm256_setzero_pd(); HALF];
+                for (c, lanes) in c.iter_mut().zip(&lanes[start..]) {
+                    // SAFETY: entries h..h + 4 ≤ 8 of an array of 8.
+                    *c = unsafe { load(lanes.as_ptr().add(h), HALF) };
+                }
+                for (row, v) in rows[h..].iter_mut().zip(transpose(c)) {
+                    // SAFETY: entries start..start + n ≤ N of an array of N.
+                    unsafe { store(row.as_mut_ptr().add(start), n, v) };
+                }
             }
         }
     }
@@ -640,7 +600,12 @@ pub mod wide_avx2 {
             _mm256_set_pd(at(3), at(2), at(1), at(0)),
             _mm256_set_pd(at(7), at(6), at(5), at(4)),
         ];
-        if halves.iter().any(|&h| needs_library(h)) {
+        let limit = _mm256_set1_epi64x(i64::from(crate::trig::MEDIUM_HIGH) - 1);
+        let far = _mm256_or_si256(
+            _mm256_cmpgt_epi64(high_word(halves[0]), limit),
+            _mm256_cmpgt_epi64(high_word(halves[1]), limit),
+        );
+        if _mm256_movemask_pd(_mm256_castsi256_pd(far)) != 0 {
             return super::sin_cos_each(x);
         }
         let (mut so, mut co) = ([0.0; LANES], [0.0; LANES]);
@@ -654,103 +619,6 @@ pub mod wide_avx2 {
         }
         (so, co)
     }
-
-    /// Whether any of four lanes is too large (or not finite) for the inline reduction.
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn needs_library(xv: __m256d) -> bool {
-        let limit = _mm256_set1_epi64x(i64::from(crate::trig::MEDIUM_HIGH) - 1);
-        let far = _mm256_cmpgt_epi64(high_word(xv), limit);
-        _mm256_movemask_pd(_mm256_castsi256_pd(far)) != 0
-    }
-
-    /// One half of every lane array, lanes `H..H + 4`: the lanes kernel's AVX2 build runs its
-    /// body once with [`low`] and once with [`high`], so each pass keeps one 4-wide register
-    /// per live lane array instead of two (16 registers hold twice as many values, fewer
-    /// spills). The operations are those of the full module on that half, so each lane has
-    /// the same bits; the other half of every result is 0.0 and never read.
-    macro_rules! half {
-        ($name:ident, $h:expr) => {
-            pub mod $name {
-                use super::super::{Lanes, LANES};
-                use super::HALF;
-                use core::arch::x86_64::*;
-
-                /// The first lane of this half.
-                const H: usize = $h;
-
-                op!(add, _mm256_add_pd, [H]);
-                op!(sub, _mm256_sub_pd, [H]);
-                op!(mul, _mm256_mul_pd, [H]);
-                op!(div, _mm256_div_pd, [H]);
-
-                /// [`super::gather`] of this half's lanes.
-                ///
-                /// # Safety
-                /// The CPU must have AVX2.
-                #[target_feature(enable = "avx2")]
-                #[inline]
-                pub fn gather<const N: usize>(rows: &[[f64; N]; LANES]) -> [Lanes; N] {
-                    let mut out = [[0.0; LANES]; N];
-                    for start in (0..N).step_by(HALF) {
-                        super::gather_block(rows, H, start, &mut out);
-                    }
-                    out
-                }
-
-                /// [`super::scatter`] of this half's lanes (the other rows are not written).
-                ///
-                /// # Safety
-                /// The CPU must have AVX2.
-                #[target_feature(enable = "avx2")]
-                #[inline]
-                pub fn scatter<const N: usize>(lanes: &[Lanes; N], rows: &mut [[f64; N]; LANES]) {
-                    super::scatter_half(lanes, H, rows);
-                }
-
-                /// [`crate::lanes::scatter_matrix`] of this half's lanes.
-                #[inline(always)]
-                pub fn scatter_matrix<const R: usize, const C: usize>(
-                    lanes: &[[Lanes; C]; R],
-                    out: &mut [[[f64; C]; R]; LANES],
-                ) {
-                    crate::lanes::scatter_matrix_lanes(lanes, out, H..H + HALF);
-                }
-
-                /// [`super::sin_cos`] of this half's lanes (each through
-                /// [`crate::trig::sin_cos`] if one needs the C library).
-                ///
-                /// # Safety
-                /// The CPU must have AVX2.
-                #[target_feature(enable = "avx2")]
-                #[inline]
-                pub fn sin_cos(x: Lanes) -> (Lanes, Lanes) {
-                    // One double at a time, as in `super::sin_cos`.
-                    let at = |l: usize| {
-                        // SAFETY: `l` < LANES, a read of an element of `x`.
-                        unsafe { core::ptr::read_volatile(x.as_ptr().add(l)) }
-                    };
-                    let (mut so, mut co) = ([0.0; LANES], [0.0; LANES]);
-                    let xv = _mm256_set_pd(at(H + 3), at(H + 2), at(H + 1), at(H));
-                    if super::needs_library(xv) {
-                        for l in H..H + HALF {
-                            (so[l], co[l]) = crate::trig::sin_cos(x[l]);
-                        }
-                        return (so, co);
-                    }
-                    let (s, c) = super::sin_cos_half(xv);
-                    // SAFETY: unaligned stores of 4 doubles at offset H ≤ 4 of arrays of 8.
-                    unsafe {
-                        _mm256_storeu_pd(so.as_mut_ptr().add(H), s);
-                        _mm256_storeu_pd(co.as_mut_ptr().add(H), c);
-                    }
-                    (so, co)
-                }
-            }
-        };
-    }
-    half!(low, 0);
-    half!(high, 4);
 
     /// [`sin_cos`] of four lanes, none of which needs the C library.
     #[target_feature(enable = "avx2")]

@@ -183,16 +183,6 @@ fn eight_wide_sin_cos_has_the_bits_of_the_scalar_one_on_every_isa_here() {
         if best() >= Isa::Avx2 {
             // SAFETY: the CPU has AVX2.
             lanes_have_the_scalar_bits(|x| unsafe { wide_avx2::sin_cos(x) });
-            // The lanes kernel's two half passes, each half from its own pass.
-            lanes_have_the_scalar_bits(|x| {
-                // SAFETY: as above.
-                let ((sl, cl), (sh, ch)) =
-                    unsafe { (wide_avx2::low::sin_cos(x), wide_avx2::high::sin_cos(x)) };
-                let half = |low: [f64; 8], high: [f64; 8]| -> [f64; 8] {
-                    core::array::from_fn(|l| if l < 4 { low[l] } else { high[l] })
-                };
-                (half(sl, sh), half(cl, ch))
-            });
         } else {
             eprintln!("SKIPPED: the AVX2 sincos did not run: this CPU has no AVX2");
         }
