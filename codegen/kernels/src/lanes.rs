@@ -317,6 +317,18 @@ pub mod wide {
         }
         let small = _mm512_cmple_epi64_mask(high, i(PIO4_HIGH.into()));
         let tiny = _mm512_cmplt_epi64_mask(high, i(TINY_HIGH.into()));
+        if small == 0xFF {
+            // Every lane within π/4 (a balancing vehicle's angles): `kernel_sin` and
+            // `kernel_cos` without a tail, no reduction, tiny lanes (x, 1).
+            let (s, c) = unreduced!(add, sub, mul, f, xv);
+            let (mut so, mut co) = ([0.0; LANES], [0.0; LANES]);
+            // SAFETY: unaligned stores of 8 doubles into local arrays.
+            unsafe {
+                _mm512_storeu_pd(so.as_mut_ptr(), _mm512_mask_blend_pd(tiny, s, xv));
+                _mm512_storeu_pd(co.as_mut_ptr(), _mm512_mask_blend_pd(tiny, c, f(1.0)));
+            }
+            return (so, co);
+        }
 
         // `reduce`: x = n·π/2 + (y0 + y1); n mod 4 is in the low bits of x·2/π + 1.5·2⁵².
         let shifted = add(mul(xv, f(INV_PIO2)), f(TO_INT));
@@ -632,6 +644,11 @@ pub mod wide_avx2 {
         // high ≤ PIO4_HIGH and high < TINY_HIGH, as signed 64-bit compares of small values.
         let small = _mm256_cmpgt_epi64(i(i64::from(PIO4_HIGH) + 1), high);
         let tiny = _mm256_cmpgt_epi64(i(TINY_HIGH.into()), high);
+        if _mm256_movemask_pd(_mm256_castsi256_pd(small)) == 0xF {
+            // `super::wide::sin_cos`'s path for lanes all within π/4, line for line.
+            let (s, c) = unreduced!(add, sub, mul, f, xv);
+            return (select(tiny, s, xv), select(tiny, c, f(1.0)));
+        }
 
         // `reduce`: x = n·π/2 + (y0 + y1); n mod 4 is in the low bits of x·2/π + 1.5·2⁵².
         let shifted = add(mul(xv, f(INV_PIO2)), f(TO_INT));

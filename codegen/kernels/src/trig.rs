@@ -61,6 +61,32 @@ macro_rules! estrin {
 }
 pub(crate) use estrin;
 
+/// `(sin x, cos x)` for |x| ≲ π/4 without a tail (`kernel_sin(x, 0.0, false)`,
+/// `kernel_cos(x, 0.0, false)`), written with the given `add`, `sub`, `mul` and constant `k`:
+/// the paired and 8-wide evaluations' operations, in the scalar order.
+macro_rules! unreduced {
+    ($add:expr, $sub:expr, $mul:expr, $k:expr, $x:expr) => {{
+        let (add, sub, mul, k, x) = ($add, $sub, $mul, $k, $x);
+        let z = mul(x, x);
+        let w = mul(z, z);
+        // sin: x + v P, v = z x.
+        let s = add(
+            x,
+            mul(
+                mul(z, x),
+                $crate::trig::estrin!(add, mul, k, z, w, SIN_POLY),
+            ),
+        );
+        // cos: w' + (((1 − w') − hz) + w Q), w' = 1 − hz, hz = z/2.
+        let q = $crate::trig::estrin!(add, mul, k, z, w, COS_POLY);
+        let hz = mul(k(0.5), z);
+        let wq = mul(w, q);
+        let w = sub(k(1.0), hz);
+        (s, add(w, add(sub(sub(k(1.0), w), hz), wq)))
+    }};
+}
+pub(crate) use unreduced;
+
 /// The coefficients of the no-tail sine's polynomial: sin x = x + x³·P(x²).
 pub(crate) const SIN_POLY: [f64; 6] = [S1, S2, S3, S4, S5, S6];
 /// ... and the cosine's: cos x = 1 − x²/2 + x⁴·Q(x²).
@@ -136,18 +162,7 @@ mod pair {
         unsafe {
             let k = _mm_set1_pd;
             let (add, sub, mul) = (_mm_add_pd, _mm_sub_pd, _mm_mul_pd);
-            let x = _mm_set_pd(b, a);
-            let z = mul(x, x);
-            let w = mul(z, z);
-            // sin: x + v P, v = z x.
-            let v = mul(z, x);
-            let s = add(x, mul(v, estrin!(add, mul, k, z, w, SIN_POLY)));
-            // cos: w' + (((1 − w') − hz) + w Q), w' = 1 − hz, hz = z/2.
-            let q = estrin!(add, mul, k, z, w, COS_POLY);
-            let hz = mul(k(0.5), z);
-            let wq = mul(w, q);
-            let w = sub(k(1.0), hz);
-            let c = add(w, add(sub(sub(k(1.0), w), hz), wq));
+            let (s, c) = unreduced!(add, sub, mul, k, _mm_set_pd(b, a));
             let lane = |v: __m128d, high: bool| {
                 if high {
                     _mm_cvtsd_f64(_mm_unpackhi_pd(v, v))
