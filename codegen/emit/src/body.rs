@@ -229,7 +229,8 @@ fn binary(op: BinaryOp, a: &Ident, b: &Ident) -> TokenStream {
     }
 }
 
-/// The dense matrix of an output as rows of expressions (`vK`, or an opaque zero: `twv_kernels::zero`).
+/// The dense matrix of an output as rows of expressions (`vK`, or at a structural zero the
+/// opaque `twv_kernels::zero::zero()`).
 pub fn dense(o: &Output) -> Vec<Vec<TokenStream>> {
     dense_with(o, quote!(::twv_kernels::zero::zero()))
 }

@@ -318,8 +318,8 @@ pub mod wide {
         let small = _mm512_cmple_epi64_mask(high, i(PIO4_HIGH.into()));
         let tiny = _mm512_cmplt_epi64_mask(high, i(TINY_HIGH.into()));
         if small == 0xFF {
-            // Every lane within π/4 (a balancing vehicle's angles): `kernel_sin` and
-            // `kernel_cos` without a tail, no reduction, tiny lanes (x, 1).
+            // Every lane within π/4 (a balancing vehicle's angles): `trig::unreduced!`, no
+            // reduction, tiny lanes (x, 1).
             let (s, c) = unreduced!(add, sub, mul, f, xv);
             let (mut so, mut co) = ([0.0; LANES], [0.0; LANES]);
             // SAFETY: unaligned stores of 8 doubles into local arrays.
@@ -359,7 +359,7 @@ pub mod wide {
         let y1 = _mm512_mask_blend_pd(small, y1, f(0.0));
         let quadrant = _mm512_mask_blend_epi64(small, quadrant, i(0));
 
-        // `kernel_sin`, with the tail (reduced lanes) and without (|x| ≤ π/4).
+        // `kernel_sin` (reduced lanes) and `unreduced!`'s sine (|x| ≤ π/4).
         let z = mul(y0, y0);
         let w = mul(z, z);
         let r = add(
@@ -376,7 +376,7 @@ pub mod wide {
         );
         let without_tail = add(y0, mul(v, estrin!(add, mul, f, z, w, SIN_POLY)));
         let s = _mm512_mask_blend_pd(small, with_tail, without_tail);
-        // `kernel_cos`.
+        // `kernel_cos` (for |x| ≤ π/4 the tail is 0, x·0 = ±0 and z²Q > 0: `unreduced!`'s bits).
         let q = estrin!(add, mul, f, z, w, COS_POLY);
         let hz = mul(f(0.5), z);
         let wq = mul(w, q);
@@ -682,7 +682,7 @@ pub mod wide_avx2 {
         let y1 = select(small, y1, f(0.0));
         let quadrant = _mm256_andnot_si256(small, quadrant);
 
-        // `kernel_sin`, with the tail (reduced lanes) and without (|x| ≤ π/4).
+        // `kernel_sin` (reduced lanes) and `unreduced!`'s sine (|x| ≤ π/4).
         let z = mul(y0, y0);
         let w = mul(z, z);
         let r = add(
@@ -699,7 +699,7 @@ pub mod wide_avx2 {
         );
         let without_tail = add(y0, mul(v, estrin!(add, mul, f, z, w, SIN_POLY)));
         let s = select(small, with_tail, without_tail);
-        // `kernel_cos`.
+        // `kernel_cos` (for |x| ≤ π/4 the tail is 0, x·0 = ±0 and z²Q > 0: `unreduced!`'s bits).
         let q = estrin!(add, mul, f, z, w, COS_POLY);
         let hz = mul(f(0.5), z);
         let wq = mul(w, q);

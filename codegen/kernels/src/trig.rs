@@ -61,9 +61,13 @@ macro_rules! estrin {
 }
 pub(crate) use estrin;
 
-/// `(sin x, cos x)` for |x| ≲ π/4 without a tail (`kernel_sin(x, 0.0, false)`,
-/// `kernel_cos(x, 0.0, false)`), written with the given `add`, `sub`, `mul` and constant `k`:
-/// the paired and 8-wide evaluations' operations, in the scalar order.
+/// `(sin x, cos x)` for 2^-27 ≤ |x| ≲ π/4, where no reduction is needed, written with the given
+/// `add`, `sub`, `mul` and constant `k`, so that the scalar, paired and 8-wide evaluations
+/// perform the same operations in the same order. fdlibm's polynomials in Estrin's scheme:
+/// sin x = x + x³·P(z) (6 dependent operations after z² instead of fdlibm's Horner-like 9; the
+/// terms after x are below x/6, so their rounding stays far below x's last bit), and fdlibm's
+/// cos x = w' + (((1 − w') − z/2) + z²·Q(z)), w' = 1 − z/2 (4 dependent operations fewer); z = x².
+/// Checked against the C library in the tests.
 macro_rules! unreduced {
     ($add:expr, $sub:expr, $mul:expr, $k:expr, $x:expr) => {{
         let (add, sub, mul, k, x) = ($add, $sub, $mul, $k, $x);
@@ -108,7 +112,7 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
             // Also keeps the sign of -0.0.
             return (x, 1.0);
         }
-        return (kernel_sin(x, 0.0, false), kernel_cos(x, 0.0, false));
+        return unreduced!(|a, b| a + b, |a, b| a - b, |a, b| a * b, |c| c, x);
     }
     if high >= MEDIUM_HIGH {
         // Huge or non-finite (NaN, ±inf give NaN): the C library's full reduction.
@@ -116,7 +120,7 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
         return unsafe { (c_sin(x), c_cos(x)) };
     }
     let (n, y0, y1) = reduce(x, high);
-    let (s, c) = (kernel_sin(y0, y1, true), kernel_cos(y0, y1, true));
+    let (s, c) = (kernel_sin(y0, y1), kernel_cos(y0, y1));
     match n & 3 {
         0 => (s, c),
         1 => (c, -s),
@@ -148,14 +152,13 @@ fn high_word(x: f64) -> u32 {
     (x.to_bits() >> 32) as u32 & 0x7FFF_FFFF
 }
 
-/// [`kernel_sin`] and [`kernel_cos`] without a tail for two arguments at once.
+/// [`unreduced!`] for two arguments at once.
 #[cfg(target_arch = "x86_64")]
 mod pair {
     use super::*;
     use core::arch::x86_64::*;
 
-    /// The operations of `kernel_sin(x, 0.0, false)` and `kernel_cos(x, 0.0, false)`, line for line,
-    /// on (a, b) in the two lanes.
+    /// The operations of [`unreduced!`] on (a, b) in the two lanes.
     #[inline(always)]
     pub(super) fn unreduced(a: f64, b: f64) -> ((f64, f64), (f64, f64)) {
         // SAFETY: SSE2 is part of the x86-64 baseline, present on every CPU this runs on.
@@ -206,43 +209,26 @@ fn reduce(x: f64, high: u32) -> (i64, f64, f64) {
     (fnum as i64, y0, y1)
 }
 
-/// sin(x + y) for |x| ≲ π/4 and a tail |y| ≤ ulp(x)/2 (`has_tail` false: y = 0).
-///
-/// Without a tail (the common case, |x| ≤ π/4) the polynomial is evaluated in Estrin's
-/// scheme, x + x³·((S1 + z S2) + z²(S3 + z S4) + z⁴(S5 + z S6)): 6 dependent operations after
-/// z² instead of fdlibm's Horner-like 9, for the same accuracy (the terms after x are below
-/// x/6, so their rounding stays far below x's last bit; checked against the C library in the
-/// tests). The reduced case keeps fdlibm's form, which carries the tail.
+/// sin(x + y) for |x| ≲ π/4 and a tail |y| ≤ ulp(x)/2, after a reduction (fdlibm's form, which
+/// carries the tail).
 #[inline(always)]
-fn kernel_sin(x: f64, y: f64, has_tail: bool) -> f64 {
+fn kernel_sin(x: f64, y: f64) -> f64 {
     let z = x * x;
     let w = z * z;
     let v = z * x;
-    if has_tail {
-        let r = S2 + z * (S3 + z * S4) + z * w * (S5 + z * S6);
-        x - ((z * (0.5 * y - v * r) - y) - v * S1)
-    } else {
-        x + v * estrin!(|a, b| a + b, |a, b| a * b, |c| c, z, w, SIN_POLY)
-    }
+    let r = S2 + z * (S3 + z * S4) + z * w * (S5 + z * S6);
+    x - ((z * (0.5 * y - v * r) - y) - v * S1)
 }
 
-/// cos(x + y) for |x| ≲ π/4 and a tail |y| ≤ ulp(x)/2 (`has_tail` false: y = 0): fdlibm's
-/// w' + (((1 − w') − z/2) + (z²·q − x y)), w' = 1 − z/2, with q in Estrin's scheme
-/// (C1 + z C2) + z²(C3 + z C4) + z⁴(C5 + z C6) (fdlibm: z·r with r Horner-like, 4 dependent
-/// operations more). Without a tail the x·y term is left out: z²·q > 0 for |x| ≥ 2^-27, so
-/// subtracting x·0 = ±0 would not change a bit (the 8-wide versions, which keep it for every
-/// lane, agree).
+/// cos(x + y) for |x| ≲ π/4 and a tail |y| ≤ ulp(x)/2, after a reduction: [`unreduced!`]'s
+/// cosine with the tail's term, w' + (((1 − w') − z/2) + (z²·Q(z) − x y)).
 #[inline(always)]
-fn kernel_cos(x: f64, y: f64, has_tail: bool) -> f64 {
+fn kernel_cos(x: f64, y: f64) -> f64 {
     let z = x * x;
     let w = z * z;
     let q = estrin!(|a, b| a + b, |a, b| a * b, |c| c, z, w, COS_POLY);
     let hz = 0.5 * z;
     let wq = w * q;
     let w = 1.0 - hz;
-    if has_tail {
-        w + (((1.0 - w) - hz) + (wq - x * y))
-    } else {
-        w + (((1.0 - w) - hz) + wq)
-    }
+    w + (((1.0 - w) - hz) + (wq - x * y))
 }
