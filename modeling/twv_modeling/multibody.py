@@ -615,7 +615,7 @@ def _jacobian_x(
     held = ca.SX.sym("held", pdot.numel())
     dM_pdot = ca.substitute(ca.jacobian(M @ held, x), held, ca.densify(pdot))
     through_inverse = ca.vertcat(
-        ca.jacobian(f[:n_coords], x), solve_spd(M, ca.jacobian(rhs, x) - dM_pdot)
+        by_differentiation[:n_coords, :], solve_spd(M, ca.jacobian(rhs, x) - dM_pdot)
     )
     through_inverse = ca.project(through_inverse, by_differentiation.sparsity())
 
