@@ -32,12 +32,13 @@ step "ruff"
 .venv/bin/ruff check modeling analysis/benches analysis/serve/browser python
 .venv/bin/ruff format --check modeling analysis/benches analysis/serve/browser python
 
-# Debian's Slurm and MUNGE for the cluster test and Chromium with its WebDriver for the browser
+# Debian's Slurm and MUNGE for the cluster test, Chromium with its WebDriver for the browser
+# test, and the aarch64 cross tools (gcc, qemu, the standard library's source) for the NEON
 # test at the end, installed while Rust builds (one after the other: apt holds a lock).
-step "Slurm, MUNGE, Chromium and ChromeDriver packages (in the background)"
+step "Slurm, MUNGE, Chromium, ChromeDriver and aarch64 cross packages (in the background)"
 mkdir -p target
-( bash .ci/slurm-test.sh --install-only && bash .ci/browser-test.sh --install-only ) \
-    >target/slurm-install.log 2>&1 &
+( bash .ci/slurm-test.sh --install-only && bash .ci/browser-test.sh --install-only &&
+    bash .ci/aarch64-test.sh --install-only ) >target/slurm-install.log 2>&1 &
 slurm_install_pid=$!
 
 step "pytest modeling/"
@@ -80,7 +81,7 @@ compile_fail_pid=$!
 step "a real single-node Slurm cluster: sbatch --array shards of a sweep (in the background)"
 if ! wait "$slurm_install_pid"; then
     cat target/slurm-install.log
-    echo "installing Slurm, MUNGE or Chromium failed"
+    echo "installing Slurm, MUNGE, Chromium or the aarch64 cross tools failed"
     exit 1
 fi
 ( bash .ci/slurm-test.sh target/debug/twv >target/slurm-test.log 2>&1 ) &
@@ -90,6 +91,12 @@ slurm_pid=$!
 step "twv serve in a real browser: headless Chromium through WebDriver (in the background)"
 ( bash .ci/browser-test.sh target/debug/twv >target/browser-test.log 2>&1 ) &
 browser_pid=$!
+
+# The aarch64 cross build and its emulated tests: beside the doc tests and the Python package,
+# which leave a core idle much of the time.
+step "aarch64: cross-build for aarch64, run the NEON tests under qemu (in the background)"
+( bash .ci/aarch64-test.sh >target/aarch64-test.log 2>&1 ) &
+aarch64_pid=$!
 
 step "cargo test --doc"
 cargo test --workspace --doc --profile dev "${features[@]}"
@@ -107,5 +114,8 @@ finish "the compile-fail test" "$compile_fail_pid" target/compile-fail-test.log
 
 step "the Slurm cluster test: merged shards = unsharded map (its log)"
 finish "the Slurm cluster test" "$slurm_pid" target/slurm-test.log
+
+step "aarch64 under qemu: the NEON lanes kernel has the one-point bits (its log)"
+finish "the aarch64 test" "$aarch64_pid" target/aarch64-test.log
 
 step "done"

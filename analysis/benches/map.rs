@@ -13,7 +13,7 @@ use std::time::Instant;
 use twv_analysis::api::{sweep, Silent, SweepSettings};
 use twv_analysis::model::{ModelSpec, ResolvedModel};
 use twv_analysis::sweep::{Grid, Metric, MetricSettings, PointResult, SETTLED_TAIL_TOLERANCE};
-use twv_kernels::isa::{best, force, Isa};
+use twv_kernels::isa::{available, force, Isa};
 
 fn env_number(name: &str, default: usize) -> Result<usize, String> {
     match std::env::var(name) {
@@ -99,8 +99,8 @@ fn bench() -> Result<bool, String> {
     println!("| lanes kernel | every step, s | settled tail, s | ratio | settled points | largest Δλ1, 1/s | statuses changed |");
     println!("|---|---:|---:|---:|---:|---:|---:|");
     let mut passed = true;
-    for isa in [Isa::Avx512, Isa::Avx2] {
-        if best() < isa {
+    for isa in [Isa::Avx512, Isa::Avx2, Isa::Neon] {
+        if !available(isa) {
             println!("| {} | not run: this CPU lacks it | | | | | |", isa.name());
             continue;
         }

@@ -35,6 +35,8 @@ pub struct Cli {
 pub enum IsaArg {
     /// The target's baseline (x86-64: SSE2)
     Baseline,
+    /// NEON (aarch64; the lanes kernel's 2-wide build)
+    Neon,
     /// AVX2 (the lanes kernel's 4-wide build)
     Avx2,
     /// AVX-512F/VL
@@ -47,6 +49,7 @@ impl IsaArg {
         use twv_kernels::isa::Isa;
         match self {
             IsaArg::Baseline => Isa::Baseline,
+            IsaArg::Neon => Isa::Neon,
             IsaArg::Avx2 => Isa::Avx2,
             IsaArg::Avx512 => Isa::Avx512,
         }

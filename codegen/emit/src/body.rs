@@ -85,7 +85,8 @@ fn angle_pairs(
 
 /// The `let`s of `f` over lane arrays (`twv_kernels::lanes`), calling the lane operations as
 /// `wide::…`: the kernel brings the module of its instruction set into scope under that name
-/// (`lanes::wide` for AVX-512, `lanes::wide_avx2`), so one body serves every build.
+/// (`lanes::wide` for AVX-512, `lanes::wide_avx2`, `lanes::wide_neon`), so one body serves
+/// every build.
 /// Each instruction's scalar expression
 /// written out for every lane, states and inputs read from the gathered lane arrays `xs`, `us`.
 /// Per lane these are the operations of [`lets`], in the same order.

@@ -381,9 +381,10 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
     );
     let args = quote!(x_lanes, u_lanes, w_lanes, f_lanes, out_lanes, jac_u_lanes);
     // The body's + − × ÷ and sincos are intrinsics on lane arrays (the vectoriser leaves the
-    // per-lane form scalar): built for AVX-512 (one 8-wide register per lane array) and for AVX2
-    // (two 4-wide ones), the same operations in the same order. Without either the lanes go one
-    // by one through the one-point kernel, which has the same bits.
+    // per-lane form scalar): built for AVX-512 (one 8-wide register per lane array), for AVX2
+    // (two 4-wide ones) and for aarch64's NEON (four 2-wide ones), the same operations in the
+    // same order. Without any the lanes go one by one through the one-point kernel, which has
+    // the same bits.
     let body = |module: TokenStream| {
         quote! {
             use #module as wide;
@@ -401,11 +402,12 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
     };
     let avx512 = body(quote!(::twv_kernels::lanes::wide));
     let avx2 = body(quote!(::twv_kernels::lanes::wide_avx2));
+    let neon = body(quote!(::twv_kernels::lanes::wide_neon));
     Ok(quote! {
         /// [`Self::kernel_variational`] with one tangent vector and ∂f/∂u at `LANES` points
-        /// (`x_lanes[l]`, … → `f_lanes[l]`, …): one AVX-512 (or AVX2) instruction stream for all
-        /// lanes where the CPU has it, else one point after the other. Every lane has the bits
-        /// of the one-point kernel.
+        /// (`x_lanes[l]`, … → `f_lanes[l]`, …): one AVX-512 (or AVX2, or NEON) instruction
+        /// stream for all lanes where the CPU has it, else one point after the other. Every
+        /// lane has the bits of the one-point kernel.
         pub fn kernel_variational_lanes(&self, #params) {
             #[cfg(target_arch = "x86_64")]
             {
@@ -419,10 +421,15 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
                     return unsafe { self.kernel_variational_lanes_avx2(#args) };
                 }
             }
+            #[cfg(target_arch = "aarch64")]
+            if ::twv_kernels::isa::neon() {
+                // SAFETY: NEON is part of every aarch64 CPU.
+                return unsafe { self.kernel_variational_lanes_neon(#args) };
+            }
             self.kernel_variational_lanes_baseline(#args)
         }
         /// [`Self::kernel_variational_lanes`] one lane after the other through the one-point
-        /// kernel: what runs where neither AVX-512 nor AVX2 is (public so tests can compare).
+        /// kernel: what runs where no wide build does (public so tests can compare).
         pub fn kernel_variational_lanes_baseline(&self, #params) {
             for l in 0..::twv_kernels::lanes::LANES {
                 self.kernel_variational(
@@ -444,6 +451,11 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
         #[target_feature(enable = "avx2")]
         unsafe fn kernel_variational_lanes_avx2(&self, #params) {
             #avx2
+        }
+        #[cfg(target_arch = "aarch64")]
+        #[target_feature(enable = "neon")]
+        fn kernel_variational_lanes_neon(&self, #params) {
+            #neon
         }
     })
 }

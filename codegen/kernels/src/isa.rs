@@ -5,17 +5,22 @@
 //! become single 8-wide operations. The generated code therefore compiles every kernel twice and
 //! picks the AVX-512 build when [`avx512`] says the CPU (and the OS) support it. The lanes
 //! kernel (eight points in one instruction stream, the maps) has a third build for AVX2, two
-//! 4-wide registers per lane array, for CPUs without AVX-512 ([`avx2`]). Rust never fuses a
+//! 4-wide registers per lane array, for CPUs without AVX-512 ([`avx2`]), and on aarch64 a NEON
+//! build, four 2-wide registers per lane array ([`Isa::Neon`]; NEON is part of every aarch64
+//! CPU, so only [`force`] turns it off). Rust never fuses a
 //! multiplication and an addition on its own, so every build performs the same IEEE operations
 //! in the same order and gives the same bits (tested): the choice changes speed, never results.
 
 use core::sync::atomic::{AtomicU8, Ordering};
 
-/// The instruction sets kernels are built for, in increasing order.
+/// The instruction sets kernels are built for, in increasing order (NEON exists on aarch64 only,
+/// AVX2 and AVX-512 on x86-64 only: [`available`] says which this CPU runs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Isa {
     /// The target's baseline (x86-64: SSE2).
     Baseline,
+    /// aarch64's Advanced SIMD (the lanes kernel's 2-wide build).
+    Neon,
     /// AVX2 (the lanes kernel's 4-wide build).
     Avx2,
     /// AVX-512F and AVX-512VL.
@@ -27,6 +32,7 @@ impl Isa {
     pub fn name(self) -> &'static str {
         match self {
             Isa::Baseline => "baseline",
+            Isa::Neon => "NEON",
             Isa::Avx2 => "AVX2",
             Isa::Avx512 => "AVX-512",
         }
@@ -35,8 +41,9 @@ impl Isa {
     fn code(self) -> u8 {
         match self {
             Isa::Baseline => 1,
-            Isa::Avx2 => 2,
-            Isa::Avx512 => 3,
+            Isa::Neon => 2,
+            Isa::Avx2 => 3,
+            Isa::Avx512 => 4,
         }
     }
 }
@@ -51,8 +58,9 @@ static CHOICE: AtomicU8 = AtomicU8::new(UNKNOWN);
 pub fn current() -> Isa {
     match CHOICE.load(Ordering::Relaxed) {
         1 => Isa::Baseline,
-        2 => Isa::Avx2,
-        3 => Isa::Avx512,
+        2 => Isa::Neon,
+        3 => Isa::Avx2,
+        4 => Isa::Avx512,
         _ => detect(),
     }
 }
@@ -71,22 +79,43 @@ pub fn avx2() -> bool {
     current() >= Isa::Avx2
 }
 
-/// The best instruction set this CPU and OS support.
-pub fn best() -> Isa {
-    if cpu_has_avx512() {
-        Isa::Avx512
-    } else if cpu_has_avx2() {
-        Isa::Avx2
-    } else {
-        Isa::Baseline
+/// Every instruction set, in increasing order.
+pub const ALL: [Isa; 4] = [Isa::Baseline, Isa::Neon, Isa::Avx2, Isa::Avx512];
+
+/// Whether this CPU and OS run the kernels' build for `isa`.
+pub fn available(isa: Isa) -> bool {
+    match isa {
+        Isa::Baseline => true,
+        Isa::Neon => cfg!(target_arch = "aarch64"),
+        Isa::Avx2 => cpu_has_avx2(),
+        Isa::Avx512 => cpu_has_avx512(),
     }
 }
 
-/// Makes every later kernel call use at most `limit` (the CPU's best if that is lower), and
-/// returns what is used: for benchmarks and tests that show each build on one machine, e.g. an
+/// Whether the lanes kernel uses its NEON build (aarch64, unless lowered with [`force`]).
+#[inline]
+pub fn neon() -> bool {
+    current() == Isa::Neon
+}
+
+/// The best instruction set this CPU and OS support.
+pub fn best() -> Isa {
+    best_up_to(Isa::Avx512)
+}
+
+/// The best available instruction set that is not above `limit`.
+fn best_up_to(limit: Isa) -> Isa {
+    ALL.into_iter()
+        .filter(|&isa| isa <= limit && available(isa))
+        .max()
+        .unwrap_or(Isa::Baseline)
+}
+
+/// Makes every later kernel call use the best build this CPU runs that is not above `limit`,
+/// and returns it: for benchmarks and tests that show each build on one machine, e.g. an
 /// AVX-512 CPU running what an AVX2-only CPU runs. Results do not change.
 pub fn force(limit: Isa) -> Isa {
-    let isa = best().min(limit);
+    let isa = best_up_to(limit);
     CHOICE.store(isa.code(), Ordering::Relaxed);
     isa
 }
@@ -107,7 +136,7 @@ pub fn force_baseline(baseline: bool) {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Calibration {
     /// The fastest time per unit seen for each build, by [`Isa::code`] − 1.
-    best: [f64; 3],
+    best: [f64; 4],
     calls: u32,
 }
 
@@ -118,16 +147,17 @@ impl Calibration {
 
     /// No call timed yet.
     pub const NEW: Self = Self {
-        best: [f64::INFINITY; 3],
+        best: [f64::INFINITY; 4],
         calls: 0,
     };
 
-    /// The builds this CPU may run now, fastest-expected first.
+    /// The builds this CPU may run now, fastest-expected first (NEON only builds the lanes
+    /// kernel, so it is not a build of the steps: the baseline alone).
     fn candidates() -> ([Isa; 3], u32) {
         match current() {
             Isa::Avx512 => ([Isa::Avx512, Isa::Avx2, Isa::Baseline], 3),
             Isa::Avx2 => ([Isa::Avx2, Isa::Baseline, Isa::Baseline], 2),
-            Isa::Baseline => ([Isa::Baseline; 3], 1),
+            Isa::Neon | Isa::Baseline => ([Isa::Baseline; 3], 1),
         }
     }
 

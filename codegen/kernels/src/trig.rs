@@ -132,11 +132,12 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
 /// ((sin a, cos a), (sin b, cos b)) with the bits of [`sin_cos`] for each: the kernels with
 /// the most angles have two (vehicle8's pitch and yaw). Where both are in the range that needs
 /// no reduction (2^-27 ≤ |x| ≲ π/4, where the vehicle's angles mostly are) the two angles'
-/// polynomials run side by side in the two lanes of SSE2 registers — the x86-64 baseline, so
-/// in every build — with the scalar operations in their order; otherwise one after the other.
+/// polynomials run side by side in the two lanes of SSE2 (x86-64) or NEON (aarch64) registers —
+/// each the baseline of its target, so in every build — with the scalar operations in their
+/// order; otherwise one after the other.
 #[inline(always)]
 pub fn sin_cos_pair(a: f64, b: f64) -> ((f64, f64), (f64, f64)) {
-    #[cfg(target_arch = "x86_64")]
+    #[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
     {
         let in_range = |x: f64| (TINY_HIGH..=PIO4_HIGH).contains(&high_word(x));
         if in_range(a) && in_range(b) {
@@ -176,6 +177,29 @@ mod pair {
             (
                 (lane(s, false), lane(c, false)),
                 (lane(s, true), lane(c, true)),
+            )
+        }
+    }
+}
+
+/// [`unreduced!`] for two arguments at once.
+#[cfg(target_arch = "aarch64")]
+mod pair {
+    use super::*;
+    use core::arch::aarch64::*;
+
+    /// The operations of [`unreduced!`] on (a, b) in the two lanes.
+    #[inline(always)]
+    pub(super) fn unreduced(a: f64, b: f64) -> ((f64, f64), (f64, f64)) {
+        // SAFETY: NEON is part of every aarch64 CPU; the load reads the two doubles of a local
+        // array.
+        unsafe {
+            let k = vdupq_n_f64;
+            let (add, sub, mul) = (vaddq_f64, vsubq_f64, vmulq_f64);
+            let (s, c) = unreduced!(add, sub, mul, k, vld1q_f64([a, b].as_ptr()));
+            (
+                (vgetq_lane_f64::<0>(s), vgetq_lane_f64::<0>(c)),
+                (vgetq_lane_f64::<1>(s), vgetq_lane_f64::<1>(c)),
             )
         }
     }

@@ -64,14 +64,17 @@ fn the_fastest_build_is_kept_whichever_it_is() {
     // One build only: nothing to time.
     force(Isa::Baseline);
     assert_eq!(Calibration::NEW.next(), (Isa::Baseline, false));
-    // A limit lowered after the choice is obeyed.
+    // A limit lowered after the choice is obeyed. (NEON builds only the lanes kernel, not the
+    // steps: on aarch64 the steps' best build is the baseline.)
     force(best());
+    let top = if best() == Isa::Neon {
+        Isa::Baseline
+    } else {
+        best()
+    };
     let mut calibration = Calibration::NEW;
-    calibrate(
-        &mut calibration,
-        |isa| if isa == best() { 1.0 } else { 5.0 },
-    );
-    assert_eq!(calibration.next().0, best());
+    calibrate(&mut calibration, |isa| if isa == top { 1.0 } else { 5.0 });
+    assert_eq!(calibration.next().0, top);
     force(Isa::Baseline);
     assert_eq!(calibration.next().0, Isa::Baseline);
     force(Isa::Avx512);

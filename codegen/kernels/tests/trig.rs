@@ -117,7 +117,6 @@ fn symmetries_hold_exactly() {
 /// The arguments that reach every path of the scalar function: tiny, |x| ≤ π/4 (no
 /// reduction), one-, two- and three-round reductions (next to k·π/2), both signs, the
 /// thresholds' neighbours.
-#[cfg(target_arch = "x86_64")]
 fn every_path() -> Vec<f64> {
     let mut xs = vec![0.0, -0.0, 5e-324, -1e-300, 1e-9, -3.7e-9];
     let mut rng = Uniform(0x5eed);
@@ -143,7 +142,6 @@ fn every_path() -> Vec<f64> {
 /// `wide_sin_cos` (an 8-lane sincos) against the scalar one at every argument of
 /// [`every_path`], lanes mixed from all over the list, and a group with a lane for the C
 /// library.
-#[cfg(target_arch = "x86_64")]
 fn lanes_have_the_scalar_bits(wide_sin_cos: impl Fn([f64; 8]) -> ([f64; 8], [f64; 8])) {
     use twv_kernels::lanes::LANES;
     let xs = every_path();
@@ -204,6 +202,14 @@ fn eight_wide_sin_cos_has_the_bits_of_the_scalar_one_on_every_isa_here() {
         } else {
             eprintln!("SKIPPED: the AVX2 sincos did not run: this CPU has no AVX2");
         }
+        eprintln!("SKIPPED: the NEON sincos did not run: it is built for aarch64 only");
+    }
+    #[cfg(target_arch = "aarch64")]
+    {
+        use twv_kernels::lanes::wide_neon;
+        // SAFETY: NEON is part of every aarch64 CPU.
+        lanes_have_the_scalar_bits(|x| unsafe { wide_neon::sin_cos(x) });
+        eprintln!("SKIPPED: the AVX-512 and AVX2 sincos did not run: they are built for x86-64");
     }
     // The dispatched entry, whatever build it picks here.
     lanes_have_the_scalar_bits(twv_kernels::lanes::sin_cos);
@@ -213,7 +219,6 @@ fn eight_wide_sin_cos_has_the_bits_of_the_scalar_one_on_every_isa_here() {
 /// take: every argument of `every_path` paired with a shifted copy of the list (both in the
 /// unreduced range, one or none), and with the special values.
 #[test]
-#[cfg(target_arch = "x86_64")]
 fn paired_sin_cos_has_the_bits_of_the_scalar_one() {
     use twv_kernels::trig::sin_cos_pair;
     let same = |(s, c): (f64, f64), x: f64| {

@@ -307,9 +307,9 @@ fn main() -> ExitCode {
 /// Runs `body` with each build of the kernels this CPU can run in force, best first (naming
 /// those it cannot), and leaves the best one in force.
 fn each_build(mut body: impl FnMut(twv_kernels::isa::Isa)) {
-    use twv_kernels::isa::{best, force, Isa};
-    for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
-        if best() < isa {
+    use twv_kernels::isa::{available, force, Isa};
+    for isa in [Isa::Avx512, Isa::Avx2, Isa::Neon, Isa::Baseline] {
+        if !available(isa) {
             println!("  {}: not run (this CPU lacks it)", isa.name());
             continue;
         }

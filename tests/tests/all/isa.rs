@@ -135,13 +135,13 @@ macro_rules! every_shipped_model {
 }
 
 /// The lanes kernel of every shipped model, runtime and baked, in each build this CPU can run
-/// (AVX-512, AVX2, one point at a time), has the one-point kernel's bits in every lane; the
+/// (AVX-512, AVX2, NEON, one point at a time), has the one-point kernel's bits in every lane; the
 /// builds it cannot run are named as not run.
 #[test]
 fn lanes_builds_have_the_one_point_bits_on_every_isa_here() {
     use twv_kernels::isa::Isa;
     on_each_build(
-        &[Isa::Avx512, Isa::Avx2, Isa::Baseline],
+        &[Isa::Avx512, Isa::Avx2, Isa::Neon, Isa::Baseline],
         "lanes build",
         |isa| {
             let what = |m: &str| format!("{m} ({})", isa.name());
@@ -172,9 +172,9 @@ fn on_each_build(
     what: &str,
     check: impl Fn(twv_kernels::isa::Isa),
 ) {
-    use twv_kernels::isa::{best, force, Isa};
+    use twv_kernels::isa::{available, force, Isa};
     for &isa in isas {
-        if best() < isa {
+        if !available(isa) {
             eprintln!(
                 "SKIPPED: the {} {what} did not run: this CPU lacks {}",
                 isa.name(),
@@ -189,7 +189,7 @@ fn on_each_build(
 }
 
 /// The hand-written CPUID/XGETBV check (the model crate is `no_std`) says what std's says, for
-/// AVX-512 and AVX2, and `force_baseline` switches the choice both ways. Called at the start of the test above rather
+/// AVX-512 and AVX2 (on aarch64: NEON), and `force_baseline` switches the choice both ways. Called at the start of the test above rather
 /// than as a test of its own: a parallel test forcing the baseline would let the comparison
 /// above run the baseline build twice.
 fn isa_detection_matches_std_and_can_be_forced() {
@@ -203,4 +203,23 @@ fn isa_detection_matches_std_and_can_be_forced() {
         twv_kernels::isa::force_baseline(false);
         assert_eq!(twv_kernels::isa::avx512(), std_says);
     }
+    #[cfg(target_arch = "aarch64")]
+    {
+        use twv_kernels::isa::{best, force, Isa};
+        assert!(std::arch::is_aarch64_feature_detected!("neon"));
+        assert_eq!((best(), twv_kernels::isa::neon()), (Isa::Neon, true));
+        // The x86 limits fall back to the best this CPU has below them.
+        assert_eq!(force(Isa::Avx512), Isa::Neon);
+        twv_kernels::isa::force_baseline(true);
+        assert!(!twv_kernels::isa::neon());
+        twv_kernels::isa::force_baseline(false);
+        assert!(twv_kernels::isa::neon());
+    }
+    #[cfg(target_arch = "x86_64")]
+    // NEON is an aarch64 build: a limit of NEON is the baseline here.
+    assert_eq!(
+        twv_kernels::isa::force(twv_kernels::isa::Isa::Neon),
+        twv_kernels::isa::Isa::Baseline
+    );
+    twv_kernels::isa::force_baseline(false);
 }

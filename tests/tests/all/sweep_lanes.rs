@@ -98,7 +98,7 @@ fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> V
         .collect();
     use twv_kernels::isa::{force, Isa};
     // Each build this CPU can run (a lower one is what `force` falls back to otherwise).
-    for isa in [Isa::Avx512, Isa::Avx2, Isa::Baseline] {
+    for isa in [Isa::Avx512, Isa::Avx2, Isa::Neon, Isa::Baseline] {
         let used = force(isa);
         let lanes = max_lyapunov_lanes(&loops, &x0, &s, &indices);
         assert_eq!(lanes.len(), one.len(), "{what}: one result per point");

@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# The NEON build of the lanes kernel on aarch64, without an aarch64 machine: cross-compiles the
+# kernels' tests and the bit-for-bit ISA tests for aarch64-unknown-linux-gnu and runs them under
+# qemu's user-mode emulator (same IEEE arithmetic as the hardware: what is checked is bits, not
+# speed). The machine's Rust toolchain has no aarch64 standard library and rustup cannot fetch
+# one here, so `-Z build-std` compiles it from Debian's source package of the same Rust version
+# (pinned below by version and SHA-256); RUSTC_BOOTSTRAP=1 lets the stable compiler take the
+# -Z flag. Installs (root) Debian's aarch64 gcc (the linker), its libc and qemu-user-static.
+#
+#   bash .ci/aarch64-test.sh                  (install if missing, build, run)
+#   bash .ci/aarch64-test.sh --install-only   (packages and the library source only)
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+
+target=aarch64-unknown-linux-gnu
+if ! command -v aarch64-linux-gnu-gcc >/dev/null || ! command -v qemu-aarch64-static >/dev/null; then
+    if [ "$(id -u)" -ne 0 ]; then
+        echo "aarch64 test: needs root to install gcc-aarch64-linux-gnu and qemu-user-static"
+        exit 1
+    fi
+    apt-get update -qq >/dev/null
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
+        gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user-static >/dev/null
+fi
+
+# The standard library's source for `-Z build-std`, where cargo looks for it (what `rustup
+# component add rust-src` would put there): Debian's rust-src of the same version, which carries
+# its dependencies vendored (library/vendor).
+sysroot="$(rustc --print sysroot)"
+if [ ! -f "$sysroot/lib/rustlib/src/rust/library/core/Cargo.toml" ]; then
+    version="$(rustc -V | cut -d' ' -f2)"
+    case "$version" in
+    1.95.0)
+        deb="rust-src_1.95.0+dfsg1-2~bpo13+1_all.deb"
+        sha256="7b76db5b880a77f9e52975d2baa6209d2f76d2c9c2789515c3088cb960e2c83b"
+        ;;
+    *)
+        echo "aarch64 test: no pinned Debian rust-src for rustc $version (add its package" \
+            "from trixie-backports or sid, and its SHA-256, to $0)"
+        exit 1
+        ;;
+    esac
+    cache="$PWD/target/aarch64-std-src"
+    mkdir -p "$cache"
+    if [ ! -f "$cache/$deb" ] || ! echo "$sha256  $cache/$deb" | sha256sum -c --quiet 2>/dev/null; then
+        curl -fsS --retry 3 -o "$cache/$deb.part" "https://deb.debian.org/debian/pool/main/r/rustc/$deb"
+        echo "$sha256  $cache/$deb.part" | sha256sum -c --quiet
+        mv "$cache/$deb.part" "$cache/$deb"
+    fi
+    rm -rf "$cache/root"
+    dpkg-deb -x "$cache/$deb" "$cache/root"
+    mkdir -p "$sysroot/lib/rustlib/src"
+    ln -sfn "$cache/root/usr/src/rustc-$version" "$sysroot/lib/rustlib/src/rust"
+fi
+[ "${1:-}" = "--install-only" ] && exit 0
+
+export RUSTC_BOOTSTRAP=1
+export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
+export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64-static -L /usr/aarch64-linux-gnu"
+cross=(-Z build-std --target "$target" --target-dir target/aarch64 --profile dev)
+# The kernels: the NEON sincos and gathers against the scalar definitions, the ISA choice.
+cargo test "${cross[@]}" -p twv-kernels
+# Every shipped model's lanes kernel in its NEON build against the one-point kernel, and the
+# map's metric in lanes against one point at a time (the tests name the x86 builds as not run).
+cargo test "${cross[@]}" -p twv-tests --test all -- --nocapture isa:: \
+    sweep_lanes::lanes_metric_has_the_bits_of_the_one_point_metric
