@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The NEON build of the lanes kernel on aarch64, without an aarch64 machine: cross-compiles the
-# kernels' tests and the bit-for-bit ISA tests for aarch64-unknown-linux-gnu and runs them under
+# The NEON build of the lanes kernel (and the JIT's aarch64 code) without an aarch64 machine:
+# cross-compiles the kernels' tests and the bit-for-bit ISA and JIT tests for
+# aarch64-unknown-linux-gnu and runs them under
 # qemu's user-mode emulator (same IEEE arithmetic as the hardware: what is checked is bits, not
 # speed). The machine's Rust toolchain has no aarch64 standard library and rustup cannot fetch
 # one here, so `-Z build-std` compiles it from Debian's source package of the same Rust version
@@ -61,6 +62,10 @@ cross=(-Z build-std --target "$target" --target-dir target/aarch64 --profile dev
 # The kernels: the NEON sincos and gathers against the scalar definitions, the ISA choice.
 cargo test "${cross[@]}" -p twv-kernels
 # Every shipped model's lanes kernel in its NEON build against the one-point kernel, and the
-# map's metric in lanes against one point at a time (the tests name the x86 builds as not run).
+# map's metric in lanes against one point at a time (the tests name the x86 builds as not run);
+# the JIT's aarch64 code (Cranelift's other backend) against the interpreter, every operation
+# and J·W written out and looped (the whole-model JIT test takes 150 s emulated: left out).
 cargo test "${cross[@]}" -p twv-tests --test all -- --nocapture isa:: \
-    sweep_lanes::lanes_metric_has_the_bits_of_the_one_point_metric
+    sweep_lanes::lanes_metric_has_the_bits_of_the_one_point_metric \
+    jit::every_operation_has_the_interpreter_bits jit::written_out_and_looped_jw_have_the_interpreter_bits \
+    jit::code_compiled_from_another_ir_is_refused
