@@ -1,9 +1,8 @@
 #!/usr/bin/env bash
 # The NEON build of the lanes kernel (and the JIT's aarch64 code) without an aarch64 machine:
 # cross-compiles the kernels' tests and the bit-for-bit ISA and JIT tests for
-# aarch64-unknown-linux-gnu and runs them under
-# qemu's user-mode emulator (same IEEE arithmetic as the hardware: what is checked is bits, not
-# speed). The machine's Rust toolchain has no aarch64 standard library and rustup cannot fetch
+# aarch64-unknown-linux-gnu and runs them under qemu's user-mode emulator (same IEEE arithmetic
+# as the hardware: what is checked is bits, not speed). The machine's Rust toolchain has no aarch64 standard library and rustup cannot fetch
 # one here, so `-Z build-std` compiles it from Debian's source package of the same Rust version
 # (pinned below by version and SHA-256); RUSTC_BOOTSTRAP=1 lets the stable compiler take the
 # -Z flag. Installs (root) Debian's aarch64 gcc (the linker), its libc and qemu-user-static.
