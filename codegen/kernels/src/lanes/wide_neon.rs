@@ -27,6 +27,9 @@ fn store(v: [float64x2_t; REGS]) -> Lanes {
 macro_rules! op {
     ($name:ident, $intr:ident) => {
         /// The operation on every lane.
+        ///
+        /// # Safety
+        /// The CPU must have NEON, as every aarch64 CPU has.
         #[target_feature(enable = "neon")]
         #[inline]
         pub fn $name(a: Lanes, b: Lanes) -> Lanes {
@@ -43,6 +46,9 @@ op!(div, vdivq_f64);
 /// [`super::gather`]: on aarch64 the compiler's own code for the definition (no store-to-load
 /// forwarding stall to avoid as on x86, see [`super::wide_avx2::gather`]; not measured on a
 /// real aarch64 CPU).
+///
+/// # Safety
+/// The CPU must have NEON, as every aarch64 CPU has.
 #[target_feature(enable = "neon")]
 #[inline]
 pub fn gather<const N: usize>(rows: &[[f64; N]; LANES]) -> [Lanes; N] {
@@ -76,6 +82,9 @@ fn any(m: uint64x2_t) -> bool {
 /// (sin, cos) of every lane with the bits of [`crate::trig::sin_cos`]: [`super::wide::sin_cos`]
 /// line for line on each pair of lanes. If any lane needs the C library all go through
 /// [`super::sin_cos_each`].
+///
+/// # Safety
+/// The CPU must have NEON, as every aarch64 CPU has.
 #[target_feature(enable = "neon")]
 #[inline]
 pub fn sin_cos(x: Lanes) -> (Lanes, Lanes) {
