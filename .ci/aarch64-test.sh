@@ -7,8 +7,14 @@
 # (pinned below by version and SHA-256); RUSTC_BOOTSTRAP=1 lets the stable compiler take the
 # -Z flag. Installs (root) Debian's aarch64 gcc (the linker), its libc and qemu-user-static.
 #
-#   bash .ci/aarch64-test.sh                  (install if missing, build, run)
-#   bash .ci/aarch64-test.sh --install-only   (packages and the library source only)
+# Then the same jobs through both CPUs' `twv` (x86-64's from the test command's build, aarch64's
+# cross-built, emulated): the study's Lyapunov spectrum and a max-Lyapunov map must write the
+# same bytes on both (JSON, CSV, SVG, PNG; the map through the NEON lanes kernel here and the
+# AVX-512 or AVX2 one there).
+#
+#   bash .ci/aarch64-test.sh [path/to/x86-64 twv]   (default target/debug/twv; install if
+#                                                    missing, build, run)
+#   bash .ci/aarch64-test.sh --install-only         (packages and the library source only)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
@@ -53,6 +59,8 @@ if [ ! -f "$sysroot/lib/rustlib/src/rust/library/core/Cargo.toml" ]; then
     ln -sfn "$cache/root/usr/src/rustc-$version" "$sysroot/lib/rustlib/src/rust"
 fi
 [ "${1:-}" = "--install-only" ] && exit 0
+native="$(realpath "${1:-target/debug/twv}")"
+[ -x "$native" ] || { echo "aarch64 test: no x86-64 twv at $native (build it first)"; exit 1; }
 
 export RUSTC_BOOTSTRAP=1
 # No debug info: these binaries are only run (~10 % less build time).
@@ -72,3 +80,30 @@ cargo test "${cross[@]}" -p twv-tests --test all -- --nocapture isa:: \
     jit::every_operation_has_the_interpreter_bits \
     jit::written_out_and_looped_jw_have_the_interpreter_bits \
     jit::code_compiled_from_another_ir_is_refused
+
+# Same inputs, same bytes, on either CPU.
+cargo build "${cross[@]}" -p twv-cli --bin twv
+emulated=(qemu-aarch64-static -L /usr/aarch64-linux-gnu "target/aarch64/$target/debug/twv")
+work="$(mktemp -d /tmp/twv-aarch64.XXXXXX)"
+trap 'rm -rf "$work"' EXIT
+jobs=(
+    "lyap --model vehicle8 --preset paper --x0 0.1,0,0,0,0,0,0,0"
+    "sweep --kp 0:8000:8 --kd 0:4000:8 --metric max-lyapunov"
+)
+failed=0
+for i in "${!jobs[@]}"; do
+    read -ra job <<<"${jobs[$i]}"
+    "$native" --quiet "${job[@]}" --out "$work/x86_64-$i" >/dev/null
+    "${emulated[@]}" --quiet "${job[@]}" --out "$work/aarch64-$i" >/dev/null
+    files=$(cd "$work/x86_64-$i" && ls)
+    [ -n "$files" ] || { echo "twv ${jobs[$i]}: wrote nothing"; failed=1; }
+    for f in $files; do
+        if cmp -s "$work/x86_64-$i/$f" "$work/aarch64-$i/$f"; then
+            echo "same bytes on x86-64 and aarch64: twv ${jobs[$i]} -> $f"
+        else
+            echo "DIFFERENT on x86-64 and aarch64: twv ${jobs[$i]} -> $f"
+            failed=1
+        fi
+    done
+done
+exit "$failed"

@@ -95,7 +95,7 @@ browser_pid=$!
 # The aarch64 cross build and its emulated tests: beside the doc tests and the Python package,
 # which leave a core idle much of the time.
 step "aarch64: cross-build for aarch64, run the NEON tests under qemu (in the background)"
-( bash .ci/aarch64-test.sh >target/aarch64-test.log 2>&1 ) &
+( bash .ci/aarch64-test.sh target/debug/twv >target/aarch64-test.log 2>&1 ) &
 aarch64_pid=$!
 
 step "cargo test --doc"
@@ -115,7 +115,7 @@ finish "the compile-fail test" "$compile_fail_pid" target/compile-fail-test.log
 step "the Slurm cluster test: merged shards = unsharded map (its log)"
 finish "the Slurm cluster test" "$slurm_pid" target/slurm-test.log
 
-step "aarch64 under qemu: the NEON lanes kernel has the one-point bits (its log)"
+step "aarch64 under qemu: the NEON lanes kernel has the one-point bits, twv the same bytes (its log)"
 finish "the aarch64 test" "$aarch64_pid" target/aarch64-test.log
 
 step "done"
