@@ -91,6 +91,37 @@ macro_rules! unreduced {
 }
 pub(crate) use unreduced;
 
+/// `(sin(x + y), cos(x + y))` for |x| ≲ π/4 and a tail |y| ≤ ulp(x)/2, after a reduction,
+/// written with the given `add`, `sub`, `mul` and constant `k` so that the scalar and 8-wide
+/// evaluations perform the same operations in the same order: fdlibm's sine kernel in the form
+/// that carries the tail, and [`unreduced!`]'s cosine with the tail's term,
+/// w' + (((1 − w') − z/2) + (z²·Q(z) − x y)).
+macro_rules! tailed {
+    ($add:expr, $sub:expr, $mul:expr, $k:expr, $x:expr, $y:expr) => {{
+        let (add, sub, mul, k, x, y) = ($add, $sub, $mul, $k, $x, $y);
+        let z = mul(x, x);
+        let w = mul(z, z);
+        let v = mul(z, x);
+        let r = add(
+            add(k(S2), mul(z, add(k(S3), mul(z, k(S4))))),
+            mul(mul(z, w), add(k(S5), mul(z, k(S6)))),
+        );
+        let s = sub(
+            x,
+            sub(
+                sub(mul(z, sub(mul(k(0.5), y), mul(v, r))), y),
+                mul(v, k(S1)),
+            ),
+        );
+        let q = $crate::trig::estrin!(add, mul, k, z, w, COS_POLY);
+        let hz = mul(k(0.5), z);
+        let wq = mul(w, q);
+        let w = sub(k(1.0), hz);
+        (s, add(w, add(sub(sub(k(1.0), w), hz), sub(wq, mul(x, y)))))
+    }};
+}
+pub(crate) use tailed;
+
 /// The coefficients of the no-tail sine's polynomial: sin x = x + x³·P(x²).
 pub(crate) const SIN_POLY: [f64; 6] = [S1, S2, S3, S4, S5, S6];
 /// ... and the cosine's: cos x = 1 − x²/2 + x⁴·Q(x²).
@@ -120,7 +151,7 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
         return unsafe { (c_sin(x), c_cos(x)) };
     }
     let (n, y0, y1) = reduce(x, high);
-    let (s, c) = (kernel_sin(y0, y1), kernel_cos(y0, y1));
+    let (s, c) = kernel_sin_cos(y0, y1);
     match n & 3 {
         0 => (s, c),
         1 => (c, -s),
@@ -233,26 +264,8 @@ fn reduce(x: f64, high: u32) -> (i64, f64, f64) {
     (fnum as i64, y0, y1)
 }
 
-/// sin(x + y) for |x| ≲ π/4 and a tail |y| ≤ ulp(x)/2, after a reduction (fdlibm's form, which
-/// carries the tail).
+/// `(sin(x + y), cos(x + y))` from [`tailed!`], one argument.
 #[inline(always)]
-fn kernel_sin(x: f64, y: f64) -> f64 {
-    let z = x * x;
-    let w = z * z;
-    let v = z * x;
-    let r = S2 + z * (S3 + z * S4) + z * w * (S5 + z * S6);
-    x - ((z * (0.5 * y - v * r) - y) - v * S1)
-}
-
-/// cos(x + y) for |x| ≲ π/4 and a tail |y| ≤ ulp(x)/2, after a reduction: [`unreduced!`]'s
-/// cosine with the tail's term, w' + (((1 − w') − z/2) + (z²·Q(z) − x y)).
-#[inline(always)]
-fn kernel_cos(x: f64, y: f64) -> f64 {
-    let z = x * x;
-    let w = z * z;
-    let q = estrin!(|a, b| a + b, |a, b| a * b, |c| c, z, w, COS_POLY);
-    let hz = 0.5 * z;
-    let wq = w * q;
-    let w = 1.0 - hz;
-    w + (((1.0 - w) - hz) + (wq - x * y))
+fn kernel_sin_cos(x: f64, y: f64) -> (f64, f64) {
+    tailed!(|a, b| a + b, |a, b| a - b, |a, b| a * b, |c| c, x, y)
 }

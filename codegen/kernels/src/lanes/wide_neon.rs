@@ -151,29 +151,11 @@ fn sin_cos_pair(xv: float64x2_t) -> (float64x2_t, float64x2_t) {
     let y1 = select(small, y1, f(0.0));
     let quadrant = vbicq_u64(quadrant, small);
 
-    // `kernel_sin` (reduced lanes) and `unreduced!`'s sine (|x| ≤ π/4).
-    let z = mul(y0, y0);
-    let w = mul(z, z);
-    let r = add(
-        add(f(S2), mul(z, add(f(S3), mul(z, f(S4))))),
-        mul(mul(z, w), add(f(S5), mul(z, f(S6)))),
-    );
-    let v = mul(z, y0);
-    let with_tail = sub(
-        y0,
-        sub(
-            sub(mul(z, sub(mul(f(0.5), y1), mul(v, r))), y1),
-            mul(v, f(S1)),
-        ),
-    );
-    let without_tail = add(y0, mul(v, estrin!(add, mul, f, z, w, SIN_POLY)));
+    // `tailed!` (reduced lanes) and `unreduced!`'s sine (|x| ≤ π/4). For |x| ≤ π/4 the tail
+    // is 0, so the cosines agree: x·0 = ±0 and z²Q > 0.
+    let (with_tail, c) = tailed!(add, sub, mul, f, y0, y1);
+    let without_tail = unreduced!(add, sub, mul, f, y0).0;
     let s = select(small, with_tail, without_tail);
-    // `kernel_cos` (for |x| ≤ π/4 the tail is 0, x·0 = ±0 and z²Q > 0: `unreduced!`'s bits).
-    let q = estrin!(add, mul, f, z, w, COS_POLY);
-    let hz = mul(f(0.5), z);
-    let wq = mul(w, q);
-    let w = sub(f(1.0), hz);
-    let c = add(w, add(sub(sub(f(1.0), w), hz), sub(wq, mul(y0, y1))));
 
     // Quadrant: 0 (s, c), 1 (c, −s), 2 (−s, −c), 3 (−c, s); tiny |x|: (x, 1).
     let odd = vtstq_u64(quadrant, u(1));
