@@ -28,7 +28,14 @@ fn main() -> ExitCode {
     restore_default_sigpipe();
     let cli = Cli::parse();
     if let Some(limit) = cli.isa {
-        twv_kernels::isa::force(limit.isa());
+        let (wanted, used) = (limit.isa(), twv_kernels::isa::force(limit.isa()));
+        if used != wanted && !cli.quiet {
+            eprintln!(
+                "twv: --isa: this CPU has no {} build; the kernels use {}",
+                wanted.name(),
+                used.name()
+            );
+        }
     }
     let ctx = Context::new(PAPER_TOML, SEGWAY_TOML, cli.quiet);
     common::install_interrupt_handler();

@@ -51,6 +51,49 @@ fn eval_prints_f_and_jacobians_as_json() {
     assert!(v["f"][4].as_f64().unwrap() > 0.0);
 }
 
+/// `--isa` with a build this CPU cannot run says what runs instead (an aarch64 build on x86-64,
+/// an x86-64 one on aarch64), the best one below it, with the same results; `--quiet` hides it.
+#[test]
+fn an_isa_this_cpu_lacks_is_named_with_the_one_used() {
+    use twv_kernels::isa::{available, Isa};
+    let args = ["eval", "--model", "lorenz", "--x", "1,2,3"];
+    let missing = [Isa::Neon, Isa::Avx2, Isa::Avx512]
+        .into_iter()
+        .find(|isa| !available(*isa))
+        .expect("no CPU has both NEON and AVX2");
+    let flag = missing.name().to_lowercase().replace('-', "");
+    let reference = twv(&args);
+    let out = twv(&[&["--isa", flag.as_str()], &args[..]].concat());
+    assert!(out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let used = twv_kernels::isa::ALL
+        .into_iter()
+        .filter(|isa| *isa < missing && available(*isa))
+        .max()
+        .unwrap();
+    assert!(
+        stderr.contains(&format!(
+            "this CPU has no {} build; the kernels use {}",
+            missing.name(),
+            used.name()
+        )),
+        "{stderr}"
+    );
+    assert_eq!(
+        out.stdout, reference.stdout,
+        "same results under --isa {flag}"
+    );
+    let quiet = twv(&[&["--quiet", "--isa", flag.as_str()], &args[..]].concat());
+    assert!(
+        quiet.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&quiet.stderr)
+    );
+    // A build every CPU has: nothing said.
+    let best = twv(&[&["--isa", "baseline"], &args[..]].concat());
+    assert!(!String::from_utf8_lossy(&best.stderr).contains("--isa"));
+}
+
 #[test]
 fn interpreter_and_generated_code_agree_through_the_cli() {
     let ir = repo().join("generated/ir/segway7.json");
