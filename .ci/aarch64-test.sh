@@ -76,13 +76,17 @@ cargo test "${cross[@]}" -p twv-kernels
 # they take minutes emulated: the map's metric in lanes (`sweep_lanes::`, 76 s; its NEON parts
 # are the lanes kernel above and `lanes::sin_cos`, which the kernels' tests check) and the
 # whole-model JIT test (150 s).
-cargo test "${cross[@]}" -p twv-tests --test all -- --nocapture isa:: \
+# The test crate and the CLI's binary come from one `cargo test` build (the binary as the one
+# its own tests run): one feature resolution, so the crates they share are built once (a
+# separate `cargo build` of the CLI resolves without dev-dependencies: 2 more minutes).
+both=(-p twv-tests -p twv-cli --test all)
+cargo test "${cross[@]}" "${both[@]}" --test cli --no-run
+cargo test "${cross[@]}" "${both[@]}" -- --nocapture isa:: \
     jit::every_operation_has_the_interpreter_bits \
     jit::written_out_and_looped_jw_have_the_interpreter_bits \
     jit::code_compiled_from_another_ir_is_refused
 
 # Same inputs, same bytes, on either CPU.
-cargo build "${cross[@]}" -p twv-cli --bin twv
 emulated=(qemu-aarch64-static -L /usr/aarch64-linux-gnu "target/aarch64/$target/debug/twv")
 work="$(mktemp -d /tmp/twv-aarch64.XXXXXX)"
 trap 'rm -rf "$work"' EXIT
