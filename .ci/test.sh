@@ -66,6 +66,12 @@ features=(--features twv-cli/jit)
 cargo test --workspace --no-run --profile dev "${features[@]}"
 cargo build --workspace --benches --profile dev "${features[@]}"
 
+# Code that only release builds compile (the RK4 steps' AVX2 and AVX-512 builds,
+# `not(debug_assertions)`): type-checked and linted too, or a release-only error would first
+# show in the main command (~30 s).
+step "cargo check --release of the release-only code, with clippy's lints"
+cargo check --release -p twv-analysis --lib
+
 # trybuild's compile-fail case builds the proc-macro's dependencies in a target folder of its
 # own (~50 s of one core): it runs in the background beside the doc tests and the Python
 # package, where a core is idle, instead of inside nextest. Both runs name what they ran.

@@ -237,7 +237,8 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Stepper<N, K> for Rk4<F,
                 Isa::Avx512 => unsafe { self.advance_to_avx512(t_end) },
                 // SAFETY: offered only when `isa::current()` is at least AVX2.
                 Isa::Avx2 => unsafe { self.advance_to_avx2(t_end) },
-                Isa::Baseline => self.advance_to_inline(t_end),
+                // (NEON builds only the lanes kernel: `Calibration` never offers it for steps.)
+                Isa::Neon | Isa::Baseline => self.advance_to_inline(t_end),
             };
             if let Some(start) = start {
                 let steps = (self.steps - steps).max(1) as f64;
