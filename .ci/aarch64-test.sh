@@ -97,8 +97,10 @@ jobs=(
 failed=0
 for i in "${!jobs[@]}"; do
     read -ra job <<<"${jobs[$i]}"
-    "$native" --quiet "${job[@]}" --out "$work/x86_64-$i" >/dev/null
-    "${emulated[@]}" --quiet "${job[@]}" --out "$work/aarch64-$i" >/dev/null
+    "$native" --quiet "${job[@]}" --out "$work/x86_64-$i" >/dev/null ||
+        { echo "twv ${jobs[$i]} failed on x86-64"; exit 1; }
+    "${emulated[@]}" --quiet "${job[@]}" --out "$work/aarch64-$i" >/dev/null ||
+        { echo "twv ${jobs[$i]} failed on aarch64 (emulated)"; exit 1; }
     files=$(cd "$work/x86_64-$i" && ls)
     [ -n "$files" ] || { echo "twv ${jobs[$i]}: wrote nothing"; failed=1; }
     for f in $files; do
