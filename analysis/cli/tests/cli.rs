@@ -90,8 +90,8 @@ fn an_isa_this_cpu_lacks_is_named_with_the_one_used() {
         String::from_utf8_lossy(&quiet.stderr)
     );
     // A build every CPU has: nothing said.
-    let best = twv(&[&["--isa", "baseline"], &args[..]].concat());
-    assert!(!String::from_utf8_lossy(&best.stderr).contains("--isa"));
+    let baseline = twv(&[&["--isa", "baseline"], &args[..]].concat());
+    assert!(!String::from_utf8_lossy(&baseline.stderr).contains("--isa"));
 }
 
 #[test]

@@ -122,6 +122,35 @@ macro_rules! tailed {
 }
 pub(crate) use tailed;
 
+/// The rounds of [`reduce`] for several lanes at once, written with the given `sub`, `mul`,
+/// constant `k` and masks, so that the 8-wide evaluations perform the scalar's operations in
+/// its order: every lane takes all three rounds and keeps the one its scalar call stops at.
+/// `beyond(y, bits)` is the mask of the lanes where x's exponent exceeds y's by more than
+/// `bits`, `and` joins two masks, `select(m, a, b)` is `m ? b : a` per lane. Returns (y0, y1).
+macro_rules! all_rounds {
+    ($sub:expr, $mul:expr, $k:expr, $x:expr, $fnum:expr, $beyond:expr, $and:expr, $select:expr) => {{
+        let (sub, mul, k, x, fnum) = ($sub, $mul, $k, $x, $fnum);
+        let (beyond, and, select) = ($beyond, $and, $select);
+        let r1 = sub(x, mul(fnum, k(PIO2_1)));
+        let w1 = mul(fnum, k(PIO2_1T));
+        let y01 = sub(r1, w1);
+        let second = beyond(y01, 16);
+        let w2 = mul(fnum, k(PIO2_2));
+        let r2 = sub(r1, w2);
+        let w2 = sub(mul(fnum, k(PIO2_2T)), sub(sub(r1, r2), w2));
+        let y02 = sub(r2, w2);
+        let third = and(second, beyond(y02, 49));
+        let w3 = mul(fnum, k(PIO2_3));
+        let r3 = sub(r2, w3);
+        let w3 = sub(mul(fnum, k(PIO2_3T)), sub(sub(r2, r3), w3));
+        let y03 = sub(r3, w3);
+        let pick = |a, b, c| select(third, select(second, a, b), c);
+        let (r, w, y0) = (pick(r1, r2, r3), pick(w1, w2, w3), pick(y01, y02, y03));
+        (y0, sub(sub(r, y0), w))
+    }};
+}
+pub(crate) use all_rounds;
+
 /// The coefficients of the no-tail sine's polynomial: sin x = x + x³·P(x²).
 pub(crate) const SIN_POLY: [f64; 6] = [S1, S2, S3, S4, S5, S6];
 /// ... and the cosine's: cos x = 1 − x²/2 + x⁴·Q(x²).

@@ -146,22 +146,9 @@ pub fn sin_cos(x: Lanes) -> (Lanes, Lanes) {
     let exponent =
         |v: __m512d| _mm512_and_si512(_mm512_srli_epi64::<52>(_mm512_castpd_si512(v)), i(0x7FF));
     let ex = _mm512_srli_epi64::<20>(high);
-    let r1 = sub(xv, mul(fnum, f(PIO2_1)));
-    let w1 = mul(fnum, f(PIO2_1T));
-    let y01 = sub(r1, w1);
-    let second = _mm512_cmpgt_epi64_mask(_mm512_sub_epi64(ex, exponent(y01)), i(16));
-    let w2 = mul(fnum, f(PIO2_2));
-    let r2 = sub(r1, w2);
-    let w2 = sub(mul(fnum, f(PIO2_2T)), sub(sub(r1, r2), w2));
-    let y02 = sub(r2, w2);
-    let third = second & _mm512_cmpgt_epi64_mask(_mm512_sub_epi64(ex, exponent(y02)), i(49));
-    let w3 = mul(fnum, f(PIO2_3));
-    let r3 = sub(r2, w3);
-    let w3 = sub(mul(fnum, f(PIO2_3T)), sub(sub(r2, r3), w3));
-    let y03 = sub(r3, w3);
-    let pick = |a, b, c| _mm512_mask_blend_pd(third, _mm512_mask_blend_pd(second, a, b), c);
-    let (r, w, y0) = (pick(r1, r2, r3), pick(w1, w2, w3), pick(y01, y02, y03));
-    let y1 = sub(sub(r, y0), w);
+    let beyond = |v, bits| _mm512_cmpgt_epi64_mask(_mm512_sub_epi64(ex, exponent(v)), i(bits));
+    let and = |a: __mmask8, b: __mmask8| a & b;
+    let (y0, y1) = all_rounds!(sub, mul, f, xv, fnum, beyond, and, _mm512_mask_blend_pd);
     // |x| ≤ π/4: no reduction, y = (x, 0), quadrant 0.
     let y0 = _mm512_mask_blend_pd(small, y0, xv);
     let y1 = _mm512_mask_blend_pd(small, y1, f(0.0));

@@ -242,25 +242,8 @@ fn sin_cos_half(xv: __m256d) -> (__m256d, __m256d) {
     let exponent =
         |v: __m256d| _mm256_and_si256(_mm256_srli_epi64::<52>(_mm256_castpd_si256(v)), i(0x7FF));
     let ex = _mm256_srli_epi64::<20>(high);
-    let r1 = sub(xv, mul(fnum, f(PIO2_1)));
-    let w1 = mul(fnum, f(PIO2_1T));
-    let y01 = sub(r1, w1);
-    let second = _mm256_cmpgt_epi64(_mm256_sub_epi64(ex, exponent(y01)), i(16));
-    let w2 = mul(fnum, f(PIO2_2));
-    let r2 = sub(r1, w2);
-    let w2 = sub(mul(fnum, f(PIO2_2T)), sub(sub(r1, r2), w2));
-    let y02 = sub(r2, w2);
-    let third = _mm256_and_si256(
-        second,
-        _mm256_cmpgt_epi64(_mm256_sub_epi64(ex, exponent(y02)), i(49)),
-    );
-    let w3 = mul(fnum, f(PIO2_3));
-    let r3 = sub(r2, w3);
-    let w3 = sub(mul(fnum, f(PIO2_3T)), sub(sub(r2, r3), w3));
-    let y03 = sub(r3, w3);
-    let pick = |a, b, c| select(third, select(second, a, b), c);
-    let (r, w, y0) = (pick(r1, r2, r3), pick(w1, w2, w3), pick(y01, y02, y03));
-    let y1 = sub(sub(r, y0), w);
+    let beyond = |v, bits| _mm256_cmpgt_epi64(_mm256_sub_epi64(ex, exponent(v)), i(bits));
+    let (y0, y1) = all_rounds!(sub, mul, f, xv, fnum, beyond, _mm256_and_si256, select);
     // |x| ≤ π/4: no reduction, y = (x, 0), quadrant 0.
     let y0 = select(small, y0, xv);
     let y1 = select(small, y1, f(0.0));

@@ -130,22 +130,7 @@ fn sin_cos_pair(xv: float64x2_t) -> (float64x2_t, float64x2_t) {
     let ex = vreinterpretq_s64_u64(vshrq_n_u64::<20>(high));
     let beyond =
         |v: float64x2_t, bits: i64| vcgtq_s64(vsubq_s64(ex, exponent(v)), vdupq_n_s64(bits));
-    let r1 = sub(xv, mul(fnum, f(PIO2_1)));
-    let w1 = mul(fnum, f(PIO2_1T));
-    let y01 = sub(r1, w1);
-    let second = beyond(y01, 16);
-    let w2 = mul(fnum, f(PIO2_2));
-    let r2 = sub(r1, w2);
-    let w2 = sub(mul(fnum, f(PIO2_2T)), sub(sub(r1, r2), w2));
-    let y02 = sub(r2, w2);
-    let third = vandq_u64(second, beyond(y02, 49));
-    let w3 = mul(fnum, f(PIO2_3));
-    let r3 = sub(r2, w3);
-    let w3 = sub(mul(fnum, f(PIO2_3T)), sub(sub(r2, r3), w3));
-    let y03 = sub(r3, w3);
-    let pick = |a, b, c| select(third, select(second, a, b), c);
-    let (r, w, y0) = (pick(r1, r2, r3), pick(w1, w2, w3), pick(y01, y02, y03));
-    let y1 = sub(sub(r, y0), w);
+    let (y0, y1) = all_rounds!(sub, mul, f, xv, fnum, beyond, vandq_u64, select);
     // |x| ≤ π/4: no reduction, y = (x, 0), quadrant 0.
     let y0 = select(small, y0, xv);
     let y1 = select(small, y1, f(0.0));
