@@ -26,18 +26,6 @@ fn env_number(name: &str, default: usize) -> Result<usize, String> {
     }
 }
 
-fn cpu() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|c| {
-            c.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, name)| name.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into())
-}
-
 /// One timed run of the map.
 fn run(model: &ResolvedModel, settings: &SweepSettings) -> Result<(f64, Vec<PointResult>), String> {
     let start = Instant::now();
@@ -92,7 +80,7 @@ fn bench() -> Result<bool, String> {
     println!(
         "{}; {} threads; {n} × {n} max-Lyapunov map of vehicle8 (Kp 0–8000, Kd 0–4000, tilt \
          0.1 rad), {rounds} alternating round(s)",
-        cpu(),
+        twv_analysis::machine::describe(),
         rayon::current_num_threads()
     );
     println!();

@@ -30,6 +30,7 @@ pub mod hand_model;
 pub mod integrate;
 pub mod linear;
 pub mod lyapunov;
+pub mod machine;
 pub mod model;
 pub mod output;
 pub mod plot;

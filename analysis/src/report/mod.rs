@@ -102,6 +102,8 @@ pub struct ReportResults {
     pub closed_loop_lyapunov: SpectrumResult,
     /// Wall time of the build [s].
     pub wall_time_s: f64,
+    /// The CPU and kernel build that wall time was measured on ([`crate::machine::describe`]).
+    pub machine: String,
 }
 
 /// The report: the page, its files, and the verdict.
@@ -134,6 +136,7 @@ pub fn build(settings: &ReportSettings, progress: &dyn Progress) -> Result<Repor
     progress.finish();
     let mut results = result?;
     results.wall_time_s = start.elapsed().as_secs_f64();
+    results.machine = crate::machine::describe();
     let (html, figures) = sections::page(settings, &results)?;
     let mut files = Files::new();
     for f in &figures {

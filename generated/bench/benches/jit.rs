@@ -170,21 +170,9 @@ fn run(timing: bool) -> Result<(), String> {
     }
 
     let plan = Plan::from_env()?;
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|c| {
-            c.lines()
-                .find(|l| l.starts_with("model name"))
-                .map(|l| l[l.find(':').map_or(0, |i| i + 2)..].to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
     println!(
-        "{cpu}; generated kernels: {} build; the JIT targets this CPU (Cranelift, host features)",
-        if twv_kernels::isa::avx512() {
-            "AVX-512"
-        } else {
-            "x86-64 baseline"
-        }
+        "{}; the JIT targets this CPU (Cranelift, host features)",
+        twv_analysis::machine::describe()
     );
     println!();
     println!(

@@ -1,5 +1,8 @@
 //! `cargo bench -p twv-bench`: the generated vehicle8 kernels against CasADi's own generated C
-//! (gcc -O3, built by this crate's build script), timed side by side in the same run.
+//! (gcc -O3, built by this crate's build script), timed side by side in the same run; then the
+//! lanes kernel, the dependent chains that bound the study's Lyapunov preset from below, and
+//! the preset itself beside them, for each build this CPU runs (which must all give the preset
+//! the same bits: a failed check, exit non-zero).
 //!
 //! A hand-written harness instead of criterion/divan: six paired measurements need no
 //! statistics framework, and the workspace builds (clippy, tests) stay free of its dependencies.
@@ -8,8 +11,14 @@
 use std::hint::black_box;
 use std::process::ExitCode;
 
+use twv_analysis::api::{spectrum, Silent, SpectrumSettings};
+use twv_analysis::lyapunov::LyapunovSettings;
+use twv_analysis::model::{ModelSpec, ResolvedModel};
 use twv_baked_paper as baked;
-use twv_bench::{compare, gate, hand_gate, time, Casadi, Pair, Plan, Point, Twv, K, NNZ, NX, OPS};
+use twv_bench::{
+    compare, gate, hand_gate, same_bits, time, time_each, Casadi, Pair, Plan, Point, Run, Stats,
+    Twv, K, NNZ, NX, OPS,
+};
 use twv_generated::Vehicle8;
 use twv_model::Model;
 
@@ -132,14 +141,10 @@ fn main() -> ExitCode {
     };
     println!(
         "vehicle8, {} samples of >= {} ms per function, paired (twv, C) samples; \
-         ns per call: median ±half the interquartile range; twv kernels: {} build",
+         ns per call: median ±half the interquartile range; {}",
         plan.samples,
         plan.sample_time.as_millis(),
-        if twv_kernels::isa::avx512() {
-            "AVX-512"
-        } else {
-            "x86-64 baseline"
-        }
+        twv_analysis::machine::describe()
     );
     println!();
     peer_table(
@@ -277,6 +282,14 @@ fn main() -> ExitCode {
     // f_jw, whatever the integrator around it does.
     println!();
     println!("dependent chains (each call waits for the previous result), runtime parameters:");
+    let preset = match Preset::new() {
+        Ok(preset) => preset,
+        Err(e) => {
+            eprintln!("twv-bench: the study's preset: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let mut spectra: Vec<Run> = Vec::new();
     each_build(|isa| {
         let mut x = pt.x;
         let f_latency = time(plan, || {
@@ -300,8 +313,75 @@ fn main() -> ExitCode {
                 stats.median * 40_000.0 / 1e6
             );
         }
+        // The preset itself beside its floor, as `twv lyap --preset paper` runs it.
+        match preset.time(plan.samples) {
+            Ok((stats, exponents)) => {
+                let ratio = stats.median / (jw_latency.median * 40_000.0);
+                println!(
+                    "  {} build, the preset's spectrum itself: {:.2} ms ±{:.1}% per run, \
+                     {ratio:.2}× the f_jw chain ({} the goal of ≤ {PRESET_GOAL}×)",
+                    isa.name(),
+                    stats.median / 1e6,
+                    stats.spread_percent(),
+                    if ratio <= PRESET_GOAL {
+                        "within"
+                    } else {
+                        "above"
+                    }
+                );
+                spectra.push((isa.name(), Ok(exponents)));
+            }
+            Err(e) => spectra.push((isa.name(), Err(e))),
+        }
     });
-    ExitCode::SUCCESS
+    // Every build must give the preset the same spectrum, bit for bit.
+    match same_bits("the preset's spectrum", &spectra) {
+        Ok(line) => {
+            println!("{line}");
+            ExitCode::SUCCESS
+        }
+        Err(line) => {
+            println!("{line}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The goal for the study preset: its spectrum within 1.2× the chain of 40 000 dependent f_jw
+/// calls it cannot run faster than.
+const PRESET_GOAL: f64 = 1.2;
+
+/// The study's Lyapunov preset (`twv lyap --model vehicle8 --preset paper --x0
+/// 0.1,0,0,0,0,0,0,0`), through the library as the command line runs it.
+struct Preset {
+    model: ResolvedModel,
+    settings: SpectrumSettings,
+}
+
+impl Preset {
+    fn new() -> Result<Self, String> {
+        Ok(Self {
+            model: ModelSpec::shipped("vehicle8")
+                .resolve()
+                .map_err(|e| e.to_string())?,
+            settings: SpectrumSettings {
+                x0: vec![0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                lyapunov: LyapunovSettings::preset_paper(),
+                ..SpectrumSettings::default()
+            },
+        })
+    }
+
+    /// Wall time per run (one run per sample) and the exponents.
+    fn time(&self, samples: usize) -> Result<(Stats, Vec<f64>), String> {
+        let mut last = Err(String::from("not run"));
+        let stats = time_each(samples, || {
+            last = spectrum(&self.model, &self.settings, &Silent)
+                .map(|r| r.result.exponents)
+                .map_err(|e| e.to_string());
+        });
+        Ok((stats, last?))
+    }
 }
 
 /// Runs `body` with each build of the kernels this CPU can run in force, best first (naming

@@ -19,6 +19,9 @@ use twv_ir::Ir;
 use twv_model::Model;
 
 mod magnitude;
+mod same_bits;
+
+pub use same_bits::{same_bits, Run};
 
 /// States, inputs, parameters, stored entries of ∂f/∂x and tangent vectors of vehicle8.
 pub const NX: usize = Vehicle8::NX;
@@ -741,6 +744,17 @@ pub fn time(plan: Plan, mut f: impl FnMut()) -> Stats {
     Stats::of(
         (0..plan.samples)
             .map(|_| run(&mut f, n).as_nanos() as f64 / n as f64)
+            .collect(),
+    )
+}
+
+/// Times `f` one call per sample, `samples` samples after one warm-up call: for calls of
+/// milliseconds (a whole Lyapunov spectrum), where [`time`]'s batches would take seconds each.
+pub fn time_each(samples: usize, mut f: impl FnMut()) -> Stats {
+    f();
+    Stats::of(
+        (0..samples)
+            .map(|_| run(&mut f, 1).as_nanos() as f64)
             .collect(),
     )
 }

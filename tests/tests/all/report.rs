@@ -65,6 +65,9 @@ fn report_numbers_are_the_library_results() {
     );
     assert_eq!(r.tune.verdict, tuned.verdict);
     assert_eq!(r.checks[1], trace_check(&preset));
+    // Its wall time names the machine and the kernels' build it was measured on.
+    assert_eq!(r.machine, twv_analysis::machine::describe());
+    assert!(report.html.contains(&format!("s on {}.", r.machine)));
 }
 
 /// The recovery finding flips with the run: the same code called on a run that falls (the

@@ -1,0 +1,105 @@
+//! The machine a figure was measured on, as benchmarks and the report name it: speed differs
+//! between CPUs (an AVX-512 Zen 4, an AVX2-only Zen 3, an aarch64 Neoverse), so every timing
+//! says which CPU and which build of the kernels produced it.
+
+use twv_kernels::isa;
+
+/// This CPU and the kernels' build in force, e.g. "Intel(R) Xeon(R) Processor (family 6, model
+/// 167); kernels: AVX-512 build (this CPU runs AVX-512, AVX2, baseline)".
+pub fn describe() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .map(|text| cpu_name(&text))
+        .unwrap_or_else(|_| format!("unknown {} CPU", std::env::consts::ARCH));
+    let runs: Vec<&str> = isa::ALL
+        .iter()
+        .rev()
+        .filter(|&&i| isa::available(i))
+        .map(|i| i.name())
+        .collect();
+    format!(
+        "{cpu}; kernels: {} build (this CPU runs {})",
+        isa::current().name(),
+        runs.join(", ")
+    )
+}
+
+/// The CPU's name from the text of /proc/cpuinfo: x86-64 reports a model name and the family
+/// and model numbers; Linux on aarch64 reports no name, only the implementer and part codes
+/// (named here for the common server cores, as lscpu does).
+pub fn cpu_name(cpuinfo: &str) -> String {
+    let field = |key: &str| {
+        cpuinfo.lines().find_map(|line| {
+            let (k, v) = line.split_once(':')?;
+            (k.trim() == key).then(|| v.trim().to_string())
+        })
+    };
+    if let Some(name) = field("model name") {
+        return match (field("cpu family"), field("model")) {
+            (Some(family), Some(model)) => format!("{name} (family {family}, model {model})"),
+            _ => name,
+        };
+    }
+    match (field("CPU implementer"), field("CPU part")) {
+        (Some(implementer), Some(part)) => {
+            let known = arm_core(&implementer, &part).map_or(String::new(), |n| format!("{n}, "));
+            format!("aarch64 CPU ({known}implementer {implementer}, part {part})")
+        }
+        _ => format!("unknown {} CPU", std::env::consts::ARCH),
+    }
+}
+
+/// A few aarch64 cores by implementer and part code (Arm's and the clouds' common ones).
+fn arm_core(implementer: &str, part: &str) -> Option<&'static str> {
+    Some(match (implementer, part) {
+        ("0x41", "0xd0c") => "Arm Neoverse N1",
+        ("0x41", "0xd40") => "Arm Neoverse V1",
+        ("0x41", "0xd49") => "Arm Neoverse N2",
+        ("0x41", "0xd4f") => "Arm Neoverse V2",
+        ("0x41", "0xd8e") => "Arm Neoverse N3",
+        ("0x41", "0xd84") => "Arm Neoverse V3",
+        ("0x41", "0xd08") => "Arm Cortex-A72",
+        ("0x41", "0xd0b") => "Arm Cortex-A76",
+        ("0xc0", "0xac3") => "AmpereOne",
+        ("0x61", _) => "Apple",
+        _ => return None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn x86_names_the_model_with_family_and_model() {
+        let text = "processor\t: 0\nvendor_id\t: AuthenticAMD\ncpu family\t: 25\nmodel\t\t: 1\n\
+                    model name\t: AMD EPYC 7B13\nflags\t\t: fpu avx2\n";
+        assert_eq!(cpu_name(text), "AMD EPYC 7B13 (family 25, model 1)");
+    }
+
+    #[test]
+    fn aarch64_names_the_core_from_its_codes() {
+        let text = "processor\t: 0\nBogoMIPS\t: 243.75\nFeatures\t: fp asimd\n\
+                    CPU implementer\t: 0x41\nCPU architecture: 8\nCPU part\t: 0xd40\n";
+        assert_eq!(
+            cpu_name(text),
+            "aarch64 CPU (Arm Neoverse V1, implementer 0x41, part 0xd40)"
+        );
+        let other = text.replace("0xd40", "0xfff");
+        assert_eq!(
+            cpu_name(&other),
+            "aarch64 CPU (implementer 0x41, part 0xfff)"
+        );
+    }
+
+    #[test]
+    fn a_text_without_either_is_unknown() {
+        assert!(cpu_name("processor: 0\n").starts_with("unknown "));
+    }
+
+    #[test]
+    fn this_machine_names_the_build_in_force() {
+        let text = describe();
+        assert!(text.contains(&format!("kernels: {} build", isa::current().name())));
+        assert!(text.contains("baseline"), "{text}");
+    }
+}
