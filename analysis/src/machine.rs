@@ -5,7 +5,7 @@
 use twv_kernels::isa;
 
 /// This CPU and the kernels' build in force, e.g. "Intel(R) Xeon(R) Processor (family 6, model
-/// 167); kernels: AVX-512 build (this CPU runs AVX-512, AVX2, baseline)".
+/// 167); x86_64 code, kernels: AVX-512 build (this CPU runs AVX-512, AVX2, baseline)".
 pub fn describe() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .map(|text| cpu_name(&text))
@@ -16,8 +16,11 @@ pub fn describe() -> String {
         .filter(|&&i| isa::available(i))
         .map(|i| i.name())
         .collect();
+    // The architecture of this binary too: under an emulator (qemu-user) /proc/cpuinfo is the
+    // host's, so only this says that aarch64 code ran on an x86-64 CPU's description.
     format!(
-        "{cpu}; kernels: {} build (this CPU runs {})",
+        "{cpu}; {} code, kernels: {} build (this CPU runs {})",
+        std::env::consts::ARCH,
         isa::current().name(),
         runs.join(", ")
     )
@@ -99,7 +102,11 @@ mod tests {
     #[test]
     fn this_machine_names_the_build_in_force() {
         let text = describe();
-        assert!(text.contains(&format!("kernels: {} build", isa::current().name())));
+        assert!(text.contains(&format!(
+            "{} code, kernels: {} build",
+            std::env::consts::ARCH,
+            isa::current().name()
+        )));
         assert!(text.contains("baseline"), "{text}");
     }
 }
