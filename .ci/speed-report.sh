@@ -6,7 +6,8 @@
 # those it could not. What to run on a CPU the README has no figures for (an AVX2-only Zen 3,
 # an aarch64 server):
 #
-#   bash .ci/speed-report.sh        # -> target/speed/<UTC time>.txt (~5 min on 2 cores)
+#   bash .ci/speed-report.sh        # -> target/speed/<UTC time>.txt (68 s of benchmarks on
+#                                   #    the 2-core Intel Xeon VM, after a release build)
 #
 # Needs Rust and python3 (the kernel bench's C peers come from CasADi in .venv, set up here) and
 # a C compiler. Not part of the test command: timings are never tests. Exits non-zero if any
@@ -21,7 +22,7 @@ out="target/speed/$(date -u +%Y%m%dT%H%M%SZ).txt"
 failed=()
 
 # Runs one benchmark command, its output into the report, and notes a failure.
-bench() { # NAME ENV... -- COMMAND...
+bench() { # NAME [VAR=VALUE...] COMMAND...
     local name="$1"
     shift
     printf '\n## %s\n\n$ %s\n\n' "$name" "$*" | tee -a "$out"

@@ -7,9 +7,8 @@ use twv_kernels::isa;
 /// This CPU and the kernels' build in force, e.g. "Intel(R) Xeon(R) Processor (family 6, model
 /// 167); x86_64 code, kernels: AVX-512 build (this CPU runs AVX-512, AVX2, baseline)".
 pub fn describe() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .map(|text| cpu_name(&text))
-        .unwrap_or_else(|_| format!("unknown {} CPU", std::env::consts::ARCH));
+    // No /proc/cpuinfo (not Linux): an empty text, which names the CPU as unknown.
+    let cpu = cpu_name(&std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default());
     let runs: Vec<&str> = isa::ALL
         .iter()
         .rev()
