@@ -17,16 +17,19 @@ set -uo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 bash .ci/setup-python.sh || { echo "speed report: setting up .venv failed"; exit 1; }
-mkdir -p target/speed
 out="target/speed/$(date -u +%Y%m%dT%H%M%SZ).txt"
+# Written as .part and renamed when every benchmark has run: an interrupted report is never
+# mistaken for a whole one.
+part="$out.part"
+mkdir -p target/speed && : >"$part" || { echo "speed report: cannot write $part"; exit 1; }
 failed=()
 
 # Runs one benchmark command, its output into the report, and notes a failure.
 bench() { # NAME [VAR=VALUE...] COMMAND...
     local name="$1"
     shift
-    printf '\n## %s\n\n$ %s\n\n' "$name" "$*" | tee -a "$out"
-    if ! env "$@" 2>&1 | tee -a "$out"; then
+    printf '\n## %s\n\n$ %s\n\n' "$name" "$*" | tee -a "$part"
+    if ! env "$@" 2>&1 | tee -a "$part"; then
         failed+=("$name")
     fi
 }
@@ -36,7 +39,7 @@ bench() { # NAME [VAR=VALUE...] COMMAND...
     echo
     echo "- commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet 2>/dev/null || echo ' (with local changes)'), $(date -u '+%Y-%m-%d %H:%M UTC')"
     echo "- $(rustc -V), $(uname -m), $(nproc) CPUs, load average $(cut -d' ' -f1-3 /proc/loadavg)"
-} | tee "$out"
+} | tee "$part"
 
 bench "kernels against both C peers, each build; the preset against its floor" \
     TWV_BENCH_SAMPLES=31 cargo bench -q -p twv-bench --bench kernels
@@ -45,6 +48,7 @@ bench "the JIT against compiled and interpreted code" \
 bench "the 100 × 100 max-Lyapunov map, each lanes build" \
     TWV_MAP_ROUNDS=2 cargo bench -q -p twv-analysis --bench map
 
+mv "$part" "$out"
 echo
 if [ "${#failed[@]}" -ne 0 ]; then
     echo "speed report: written to $out; checks FAILED in: ${failed[*]}"
