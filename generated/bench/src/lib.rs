@@ -748,15 +748,14 @@ pub fn time(plan: Plan, mut f: impl FnMut()) -> Stats {
     )
 }
 
-/// Times `f` one call per sample, `samples` samples after one warm-up call: for calls of
-/// milliseconds (a whole Lyapunov spectrum), where [`time`]'s batches would take seconds each.
-pub fn time_each(samples: usize, mut f: impl FnMut()) -> Stats {
-    f();
-    Stats::of(
-        (0..samples)
-            .map(|_| run(&mut f, 1).as_nanos() as f64)
-            .collect(),
-    )
+/// How a measured ratio (lower is better) stands against a goal: "within" at or below it,
+/// "above" otherwise (a NaN ratio included).
+pub fn against_goal(ratio: f64, goal: f64) -> &'static str {
+    if ratio <= goal {
+        "within"
+    } else {
+        "above"
+    }
 }
 
 /// Iterations per sample so that one sample takes at least `target`.
@@ -788,6 +787,15 @@ fn run(f: &mut impl FnMut(), n: u64) -> Duration {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_ratio_is_within_its_goal_up_to_it_and_above_beyond() {
+        use super::against_goal;
+        assert_eq!(against_goal(1.04, 1.2), "within");
+        assert_eq!(against_goal(1.2, 1.2), "within");
+        assert_eq!(against_goal(1.21, 1.2), "above");
+        assert_eq!(against_goal(f64::NAN, 1.2), "above");
+    }
+
     use super::*;
 
     /// The gate is not vacuous: C evaluated with the base mass off by one part in 10^9 (far
