@@ -2,7 +2,8 @@
 //! settled tail, side by side: wall time, the ratio, and what the shortcut changed (each
 //! point's λ1 against `SETTLED_TAIL_TOLERANCE`, the statuses), for each lanes-kernel build this
 //! CPU can run. A benchmark, not a test: it asserts no time, but a point moved beyond the
-//! tolerance or a changed status is a failed check and exits non-zero.
+//! tolerance, a changed status, or a build whose map differs in any bit from the baseline
+//! build's (run once, untimed, first) is a failed check and exits non-zero.
 //!
 //! `cargo bench -p twv-analysis --bench map` (release); `TWV_MAP_N=40` for a 40 × 40 map
 //! (default 100 × 100: Kp 0–8000, Kd 0–4000), `TWV_MAP_ROUNDS` (default 2) alternating runs.
@@ -49,6 +50,20 @@ fn compare(tail: &[PointResult], full: &[PointResult]) -> (f64, usize) {
     (largest, statuses)
 }
 
+/// Each point's status, λ1 and settling time as bits: what two builds must agree on exactly.
+fn bits(points: &[PointResult]) -> Vec<(String, Option<u64>, Option<u64>)> {
+    points
+        .iter()
+        .map(|p| {
+            (
+                format!("{:?}", p.status),
+                p.value.map(f64::to_bits),
+                p.settled_at.map(f64::to_bits),
+            )
+        })
+        .collect()
+}
+
 fn main() -> ExitCode {
     match bench() {
         Ok(true) => ExitCode::SUCCESS,
@@ -84,6 +99,11 @@ fn bench() -> Result<bool, String> {
         rayon::current_num_threads()
     );
     println!();
+    // The reference bits: the baseline build (the one the tests check against one point at a
+    // time), untimed.
+    force(Isa::Baseline);
+    let (_, reference) = run(&model, &tail)?;
+    let mut same_bits = true;
     println!("| lanes kernel | every step, s | settled tail, s | ratio | settled points | largest Δλ1, 1/s | statuses changed |");
     println!("|---|---:|---:|---:|---:|---:|---:|");
     let mut passed = true;
@@ -110,13 +130,19 @@ fn bench() -> Result<bool, String> {
             p_tail.len()
         );
         passed &= largest <= SETTLED_TAIL_TOLERANCE && statuses == 0;
+        same_bits &= bits(&p_tail) == bits(&reference);
     }
     force(Isa::Avx512);
+    passed &= same_bits;
     println!();
     println!(
         "times: the best of the rounds; check: every λ1 within {SETTLED_TAIL_TOLERANCE:e} /s of \
-         the full run and no status changed — {}",
+         the full run, no status changed, and every build's map (settled tail) has the bits of \
+         the baseline build's — {}",
         if passed { "held" } else { "FAILED" }
     );
+    if !same_bits {
+        println!("a build's map differs in some bit from the baseline build's");
+    }
     Ok(passed)
 }

@@ -48,6 +48,8 @@ fn hot_path_allocations<const NX: usize, const NU: usize>(model: &impl Model<NX,
     const L: usize = twv_kernels::lanes::LANES;
     let (xl, ul, wl) = ([x; L], [u; L], [[0.3; NX]; L]);
     let (mut fl, mut jwl, mut jul) = ([[0.0; NX]; L], [[0.0; NX]; L], [[[0.0; NU]; NX]; L]);
+    let (xa, ua, wa) = ([[0.1; L]; NX], [[0.2; L]; NU], [[0.3; L]; NX]);
+    let (mut fa, mut jwa, mut jua) = ([[0.0; L]; NX], [[0.0; L]; NX], [[[0.0; L]; NU]; NX]);
     let before = allocations();
     model.f(&x, &u, &mut f);
     model.jac_x(&x, &u, &mut jac);
@@ -56,8 +58,10 @@ fn hot_path_allocations<const NX: usize, const NU: usize>(model: &impl Model<NX,
     model.jw(&x, &u, &w, &mut jw);
     model.f_jw_jac_u(&x, &u, &w, &mut f, &mut jw, &mut ju);
     model.f_jw_jac_u_lanes(&xl, &ul, &wl, &mut fl, &mut jwl, &mut jul);
+    model.f_jw_jac_u_lane_arrays(&xa, &ua, &wa, &mut fa, &mut jwa, &mut jua);
     let after = allocations();
     std::hint::black_box((&f, &jac, &jw, &sparse, &ju, &fl, &jwl, &jul));
+    std::hint::black_box((&fa, &jwa, &jua));
     after - before
 }
 

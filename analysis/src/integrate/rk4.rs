@@ -119,14 +119,14 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Rk4<F, N, K> {
 
 /// The stage derivatives, running sum and stage points of one RK4 step of `L` states.
 #[derive(Debug, Clone)]
-pub(crate) struct Rk4Scratch<const N: usize, const K: usize, const L: usize> {
+struct Rk4Scratch<const N: usize, const K: usize, const L: usize> {
     k: [VarState<N, K>; L],
     acc: [VarState<N, K>; L],
     tmp: [VarState<N, K>; L],
 }
 
 impl<const N: usize, const K: usize, const L: usize> Rk4Scratch<N, K, L> {
-    pub(crate) const ZERO: Self = Self {
+    const ZERO: Self = Self {
         k: [VarState::ZERO; L],
         acc: [VarState::ZERO; L],
         tmp: [VarState::ZERO; L],
@@ -135,12 +135,12 @@ impl<const N: usize, const K: usize, const L: usize> Rk4Scratch<N, K, L> {
 
 /// One RK4 step for `L` independent states `y`, state `l` from time `t[l]` with step `h[l]`,
 /// in four fused passes over each; `eval(times, states, derivatives)` gives the stage
-/// derivatives of all `L` at once (one state: the field; eight: a lanes kernel). Per state
-/// these are the same operations whatever `L` is and whatever the others' times, so a state
-/// stepped among others keeps the bits it has alone. Returns, per state, whether its new point
-/// is finite.
+/// derivatives of all `L` at once. Per state these are the same operations whatever `L` is and
+/// whatever the others' times, and those of `rk4_step_lanes` (the maps' lane arrays) per
+/// point, so a point has the same bits in every form. Returns, per state, whether its new
+/// point is finite.
 #[inline(always)]
-pub(crate) fn rk4_step_each<const N: usize, const K: usize, const L: usize>(
+fn rk4_step_each<const N: usize, const K: usize, const L: usize>(
     t: &[f64; L],
     h: &[f64; L],
     y: &mut [VarState<N, K>; L],

@@ -1,8 +1,9 @@
 //! The max-Lyapunov metric of many grid points, run eight at a time: the points' closed loops
-//! are stepped together so the model runs through its lanes kernel (one vector instruction
-//! stream for eight points, see `twv_kernels::lanes`) and a plain PD law as lane arrays
-//! ([`LoopLanes`]), while everything else is done point by point with the code of the
-//! one-point metric ([`max_lyapunov`], which is this driver with one lane). Every point
+//! are stepped together, their states kept as lane arrays ([`LaneStates`]), so the RK4
+//! combinations, a plain PD law ([`LoopLanes`]) and the model's lanes kernel (one vector
+//! instruction stream for eight points, see `twv_kernels::lanes`) are whole-lane operations,
+//! while the rare work (interval ends, the settled tail) is done point by point with the code
+//! of the one-point metric ([`max_lyapunov`], which is this driver with one lane). Every point
 //! therefore gets the bits it has alone (`tests/tests/all/sweep_lanes.rs` checks it) and
 //! depends only on its index.
 //!
@@ -11,6 +12,8 @@
 //! [`super::settle`]) — takes the next point of the chunk at once instead of riding along
 //! until the slowest of its group is done. A lane with nothing left to run is parked at a
 //! finite start state (which keeps the lanes kernel on its fast path) and its results ignored.
+
+use core::marker::PhantomData;
 
 use twv_kernels::lanes::LANES;
 use twv_model::Model;
@@ -21,7 +24,8 @@ use super::point::{PointResult, Status};
 use super::settle::{at_rest, tail_log_growth};
 use crate::control::{loop_states, LoopLanes, PidLoop};
 use crate::integrate::{
-    equal_steps, eval_stage, project, rk4_step_each, Projected, Rk4Scratch, VarState,
+    equal_steps, eval_stage, rk4_step_lanes, LaneField, LaneRk4Scratch, LaneStates, Projected,
+    VarState,
 };
 use crate::lyapunov::{initial_basis, orthonormalize, InitialBasis, IntervalEnds};
 
@@ -69,8 +73,8 @@ where
 trait LoopGroup<'a, M, const NX: usize, const NU: usize, const NA: usize, const L: usize> {
     /// Lane `lane` runs `lp` from now on.
     fn set(&mut self, lane: usize, lp: PidLoop<'a, M, NX, NU, NA>);
-    /// The stage derivatives of every lane (`t[l]`, `y[l]` → `dy[l]`).
-    fn eval(&self, t: &[f64; L], y: &[VarState<NA, 1>; L], dy: &mut [VarState<NA, 1>; L]);
+    /// The stage derivatives of every lane (`t[l]`, point `l` of `y` → point `l` of `dy`).
+    fn eval(&self, t: &[f64; L], y: &LaneStates<NA, L>, dy: &mut LaneStates<NA, L>);
 }
 
 impl<'a, M, const NX: usize, const NU: usize, const NA: usize> LoopGroup<'a, M, NX, NU, NA, LANES>
@@ -83,12 +87,7 @@ where
     }
 
     #[inline(always)]
-    fn eval(
-        &self,
-        t: &[f64; LANES],
-        y: &[VarState<NA, 1>; LANES],
-        dy: &mut [VarState<NA, 1>; LANES],
-    ) {
+    fn eval(&self, t: &[f64; LANES], y: &LaneStates<NA, LANES>, dy: &mut LaneStates<NA, LANES>) {
         LoopLanes::eval(self, t, y, dy);
     }
 }
@@ -106,8 +105,38 @@ where
     }
 
     #[inline(always)]
-    fn eval(&self, t: &[f64; 1], y: &[VarState<NA, 1>; 1], dy: &mut [VarState<NA, 1>; 1]) {
-        eval_stage(&self.0, t[0], &y[0], false, &mut dy[0]);
+    fn eval(&self, t: &[f64; 1], y: &LaneStates<NA, 1>, dy: &mut LaneStates<NA, 1>) {
+        let mut d = VarState::ZERO;
+        eval_stage(&self.0, t[0], &y.point(0), false, &mut d);
+        dy.set_point(0, &d);
+    }
+}
+
+/// The stage derivatives of the lanes' loops, each lane's tangent projected onto its point's
+/// kept coordinates (`keep[i][l]`; an idle lane keeps all).
+struct LaneStages<'g, 'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize> {
+    group: &'g G,
+    keep: &'g [[bool; L]; NA],
+    loops: PhantomData<PidLoop<'a, M, NX, NU, NA>>,
+}
+
+impl<'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize> LaneField<NA, L>
+    for LaneStages<'_, 'a, G, M, NX, NU, NA, L>
+where
+    G: LoopGroup<'a, M, NX, NU, NA, L>,
+    M: Model<NX, NU>,
+{
+    #[inline(always)]
+    fn eval(&mut self, t: &[f64; L], y: &LaneStates<NA, L>, dy: &mut LaneStates<NA, L>) {
+        self.group.eval(t, y, dy);
+        // `project` lane by lane: a dropped coordinate becomes +0.
+        for (w, keep) in dy.w.iter_mut().zip(self.keep) {
+            for l in 0..L {
+                if !keep[l] {
+                    w[l] = 0.0;
+                }
+            }
+        }
     }
 }
 
@@ -186,11 +215,12 @@ impl<const NA: usize> Run<NA> {
         (self.steps_left, self.h) = equal_steps(self.t_stop - self.t, s.h);
     }
 
-    /// Books the step just taken to `y` (`finite`: whether it is); `Some` when the run ended.
+    /// Books the step just taken to point `l` of `y` (`finite`: whether it is); `Some` when
+    /// the run ended.
     #[inline(always)]
-    fn after_step<M, const NX: usize, const NU: usize>(
+    fn after_step<M, const NX: usize, const NU: usize, const L: usize>(
         &mut self,
-        y: &mut VarState<NA, 1>,
+        (y, l): (&mut LaneStates<NA, L>, usize),
         finite: bool,
         lp: &PidLoop<'_, M, NX, NU, NA>,
         s: &MetricSettings,
@@ -202,7 +232,7 @@ impl<const NA: usize> Run<NA> {
         if !finite {
             return Some(End::without_value(Status::BlewUp));
         }
-        if y.x[lp.plant().measured.phi].abs() > s.fall_angle {
+        if y.x[lp.plant().measured.phi][l].abs() > s.fall_angle {
             return Some(End::without_value(Status::Fell));
         }
         self.steps_left -= 1;
@@ -211,7 +241,10 @@ impl<const NA: usize> Run<NA> {
             return None;
         }
         self.t = self.t_stop;
-        self.interval_end(y, lp, s, ends)
+        let mut point = y.point(l);
+        let end = self.interval_end(&mut point, lp, s, ends);
+        y.set_tangent(l, &point.w[0]);
+        end
     }
 
     /// Re-orthonormalises at an interval end, adds a measured interval's growth, and ends the
@@ -280,8 +313,87 @@ impl<const NA: usize> Run<NA> {
 }
 
 /// Runs every loop of `loops` through the `L` lanes of `group` (whose lanes may hold any loops
-/// of the same model to begin with), refilling a lane as soon as its point is done.
+/// of the same model to begin with), refilling a lane as soon as its point is done; with the
+/// build of [`drive_inline`] for the instruction set the kernels use ([`twv_kernels::isa`]).
 fn drive<'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize>(
+    group: G,
+    loops: &[PidLoop<'a, M, NX, NU, NA>],
+    x0: &[f64; NX],
+    s: &MetricSettings,
+    indices: &[usize],
+) -> Vec<PointResult>
+where
+    G: LoopGroup<'a, M, NX, NU, NA, L>,
+    M: Model<NX, NU>,
+{
+    #[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
+    match twv_kernels::isa::current() {
+        // SAFETY: `current` returns AVX-512 only when the CPU and the OS support AVX-512F and
+        // AVX-512VL.
+        twv_kernels::isa::Isa::Avx512 => {
+            return unsafe { drive_avx512(group, loops, x0, s, indices) }
+        }
+        // SAFETY: `current` returns AVX2 only when the CPU and the OS support it.
+        twv_kernels::isa::Isa::Avx2 => return unsafe { drive_avx2(group, loops, x0, s, indices) },
+        twv_kernels::isa::Isa::Neon | twv_kernels::isa::Isa::Baseline => {}
+    }
+    drive_inline(group, loops, x0, s, indices)
+}
+
+/// [`drive_inline`] built for AVX-512: the laws, the RK4 combinations and the assembly of
+/// the loops' derivatives become 8-wide operations, and the lanes kernel is called within the
+/// same build. The same IEEE operations in the same order as the baseline build (Rust never
+/// fuses a multiply and an add), so the same bits; release builds only, as the RK4 steps'.
+///
+/// # Safety
+/// The CPU must have AVX-512F and AVX-512VL.
+#[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
+#[target_feature(enable = "avx512f,avx512vl")]
+unsafe fn drive_avx512<
+    'a,
+    G,
+    M,
+    const NX: usize,
+    const NU: usize,
+    const NA: usize,
+    const L: usize,
+>(
+    group: G,
+    loops: &[PidLoop<'a, M, NX, NU, NA>],
+    x0: &[f64; NX],
+    s: &MetricSettings,
+    indices: &[usize],
+) -> Vec<PointResult>
+where
+    G: LoopGroup<'a, M, NX, NU, NA, L>,
+    M: Model<NX, NU>,
+{
+    drive_inline(group, loops, x0, s, indices)
+}
+
+/// The same for AVX2 (4-wide).
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
+#[target_feature(enable = "avx2")]
+unsafe fn drive_avx2<'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize>(
+    group: G,
+    loops: &[PidLoop<'a, M, NX, NU, NA>],
+    x0: &[f64; NX],
+    s: &MetricSettings,
+    indices: &[usize],
+) -> Vec<PointResult>
+where
+    G: LoopGroup<'a, M, NX, NU, NA, L>,
+    M: Model<NX, NU>,
+{
+    drive_inline(group, loops, x0, s, indices)
+}
+
+/// [`drive`] written out, every step inlined: the body of its builds.
+#[inline(always)]
+fn drive_inline<'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize>(
     mut group: G,
     loops: &[PidLoop<'a, M, NX, NU, NA>],
     x0: &[f64; NX],
@@ -302,10 +414,13 @@ where
         results[point] = Some(r);
     };
     let mut runs: [Option<Run<NA>>; L] = [None; L];
-    let mut y = [VarState::<NA, 1>::ZERO; L];
+    let mut y = LaneStates::<NA, L>::ZERO;
     // What an idle lane is reset to after every step: the start of the last point it ran.
     let mut parked = [VarState::<NA, 1>::ZERO; L];
-    let mut scratch = Rk4Scratch::<NA, 1, L>::ZERO;
+    // Each lane's projection (an idle lane keeps every coordinate), time and step size.
+    let mut keep = [[true; L]; NA];
+    let (mut t, mut h) = ([0.0; L], [s.h; L]);
+    let mut scratch = LaneRk4Scratch::<NA, L>::ZERO;
     let mut next = 0;
     loop {
         // Idle lanes take the next points; a point that ends before its first step is booked.
@@ -316,7 +431,12 @@ where
                 match Run::start(&loops[point], x0, (s, settings_ok), &ends, point) {
                     Ok(run) => {
                         group.set(l, loops[point]);
-                        (y[l], parked[l]) = (run.start, run.start);
+                        y.set_point(l, &run.start);
+                        parked[l] = run.start;
+                        for (row, k) in keep.iter_mut().zip(run.keep) {
+                            row[l] = k;
+                        }
+                        (t[l], h[l]) = (run.t, run.h);
                         runs[l] = Some(run);
                     }
                     Err(status) => finish(&mut results, point, End::without_value(status)),
@@ -326,26 +446,28 @@ where
         if runs.iter().all(Option::is_none) {
             break;
         }
-        let t: [f64; L] = core::array::from_fn(|l| runs[l].as_ref().map_or(0.0, |r| r.t));
-        let h: [f64; L] = core::array::from_fn(|l| runs[l].as_ref().map_or(s.h, |r| r.h));
-        let finite = rk4_step_each(&t, &h, &mut y, &mut scratch, |t, y, dy| {
-            group.eval(t, y, dy);
-            for (d, run) in dy.iter_mut().zip(&runs) {
-                if let Some(run) = run {
-                    project(&run.keep, &mut d.w[0]);
-                }
-            }
-        });
+        let mut stages = LaneStages {
+            group: &group,
+            keep: &keep,
+            loops: PhantomData,
+        };
+        let finite = rk4_step_lanes(&t, &h, &mut y, &mut scratch, &mut stages);
         for l in 0..L {
             let Some(run) = &mut runs[l] else {
-                y[l] = parked[l];
+                y.set_point(l, &parked[l]);
                 continue;
             };
             let point = run.point;
-            if let Some(end) = run.after_step(&mut y[l], finite[l], &loops[point], s, &ends) {
+            if let Some(end) = run.after_step((&mut y, l), finite[l], &loops[point], s, &ends) {
                 finish(&mut results, point, end);
                 runs[l] = None;
-                y[l] = parked[l];
+                y.set_point(l, &parked[l]);
+                for row in &mut keep {
+                    row[l] = true;
+                }
+                (t[l], h[l]) = (0.0, s.h);
+            } else {
+                (t[l], h[l]) = (run.t, run.h);
             }
         }
     }

@@ -380,29 +380,61 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
         jac_u_lanes: &mut [[[f64; #nu]; #nx]; ::twv_kernels::lanes::LANES]
     );
     let args = quote!(x_lanes, u_lanes, w_lanes, f_lanes, out_lanes, jac_u_lanes);
+    let array_params = quote!(
+        xs: &[::twv_kernels::lanes::Lanes; #nx],
+        us: &[::twv_kernels::lanes::Lanes; #nu],
+        wl: &[::twv_kernels::lanes::Lanes; #nx],
+        f_arrays: &mut [::twv_kernels::lanes::Lanes; #nx],
+        out_arrays: &mut [::twv_kernels::lanes::Lanes; #nx],
+        jac_u_arrays: &mut [[::twv_kernels::lanes::Lanes; #nu]; #nx]
+    );
+    let array_args = quote!(xs, us, wl, f_arrays, out_arrays, jac_u_arrays);
     // The body's + − × ÷ and sincos are intrinsics on lane arrays (the vectoriser leaves the
     // per-lane form scalar): built for AVX-512 (one 8-wide register per lane array), for AVX2
     // (two 4-wide ones) and for aarch64's NEON (four 2-wide ones), the same operations in the
     // same order. Without any the lanes go one by one through the one-point kernel, which has
-    // the same bits.
+    // the same bits. The body works on lane arrays; the one-array-per-point form gathers its
+    // arguments into them and scatters the results back.
     let body = |module: TokenStream| {
         quote! {
             use #module as wide;
-            let xs = wide::gather(x_lanes);
-            let us = wide::gather(u_lanes);
             #fj_body
-            ::twv_kernels::lanes::scatter(&#fj_f, f_lanes);
-            let wl = wide::gather(w_lanes);
-            ::twv_kernels::lanes::scatter(&#jw, out_lanes);
+            *f_arrays = #fj_f;
+            *out_arrays = #jw;
             {
                 #ju_body
-                ::twv_kernels::lanes::scatter_matrix(&#ju_out, jac_u_lanes);
+                *jac_u_arrays = #ju_out;
             }
+        }
+    };
+    let per_point = |module: TokenStream, arrays: TokenStream| {
+        quote! {
+            use #module as wide;
+            let (xs, us, wl) = (wide::gather(x_lanes), wide::gather(u_lanes), wide::gather(w_lanes));
+            let mut f_arrays = [[0.0; ::twv_kernels::lanes::LANES]; #nx];
+            let mut out_arrays = [[0.0; ::twv_kernels::lanes::LANES]; #nx];
+            let mut jac_u_arrays = [[[0.0; ::twv_kernels::lanes::LANES]; #nu]; #nx];
+            self.#arrays(&xs, &us, &wl, &mut f_arrays, &mut out_arrays, &mut jac_u_arrays);
+            ::twv_kernels::lanes::scatter(&f_arrays, f_lanes);
+            ::twv_kernels::lanes::scatter(&out_arrays, out_lanes);
+            ::twv_kernels::lanes::scatter_matrix(&jac_u_arrays, jac_u_lanes);
         }
     };
     let avx512 = body(quote!(::twv_kernels::lanes::wide));
     let avx2 = body(quote!(::twv_kernels::lanes::wide_avx2));
     let neon = body(quote!(::twv_kernels::lanes::wide_neon));
+    let avx512_points = per_point(
+        quote!(::twv_kernels::lanes::wide),
+        quote!(kernel_variational_lane_arrays_avx512),
+    );
+    let avx2_points = per_point(
+        quote!(::twv_kernels::lanes::wide_avx2),
+        quote!(kernel_variational_lane_arrays_avx2),
+    );
+    let neon_points = per_point(
+        quote!(::twv_kernels::lanes::wide_neon),
+        quote!(kernel_variational_lane_arrays_neon),
+    );
     Ok(quote! {
         /// [`Self::kernel_variational`] with one tangent vector and ∂f/∂u at `LANES` points
         /// (`x_lanes[l]`, … → `f_lanes[l]`, …): one AVX-512 (or AVX2, or NEON) instruction
@@ -442,19 +474,70 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
                 );
             }
         }
+        /// [`Self::kernel_variational_lanes`] on lane arrays (`xs[i][l]`, … → `f_arrays[i][l]`,
+        /// …: entry `i` of point `l`), the form a caller that keeps its points that way
+        /// (the maps' driver) passes without transposing. Every lane has the bits of the
+        /// one-point kernel.
+        pub fn kernel_variational_lane_arrays(&self, #array_params) {
+            #[cfg(target_arch = "x86_64")]
+            {
+                if ::twv_kernels::isa::avx512() {
+                    // SAFETY: as in `kernel_variational_lanes`.
+                    return unsafe { self.kernel_variational_lane_arrays_avx512(#array_args) };
+                }
+                if ::twv_kernels::isa::avx2() {
+                    // SAFETY: as in `kernel_variational_lanes`.
+                    return unsafe { self.kernel_variational_lane_arrays_avx2(#array_args) };
+                }
+            }
+            #[cfg(target_arch = "aarch64")]
+            if ::twv_kernels::isa::neon() {
+                // SAFETY: NEON is part of every aarch64 CPU.
+                return unsafe { self.kernel_variational_lane_arrays_neon(#array_args) };
+            }
+            const L: usize = ::twv_kernels::lanes::LANES;
+            let (mut x_lanes, mut u_lanes) = ([[0.0; #nx]; L], [[0.0; #nu]; L]);
+            let mut w_lanes = [[0.0; #nx]; L];
+            ::twv_kernels::lanes::scatter(xs, &mut x_lanes);
+            ::twv_kernels::lanes::scatter(us, &mut u_lanes);
+            ::twv_kernels::lanes::scatter(wl, &mut w_lanes);
+            let (mut f_lanes, mut out_lanes) = ([[0.0; #nx]; L], [[0.0; #nx]; L]);
+            let mut jac_u_lanes = [[[0.0; #nu]; #nx]; L];
+            self.kernel_variational_lanes_baseline(
+                &x_lanes, &u_lanes, &w_lanes, &mut f_lanes, &mut out_lanes, &mut jac_u_lanes,
+            );
+            *f_arrays = ::twv_kernels::lanes::gather(&f_lanes);
+            *out_arrays = ::twv_kernels::lanes::gather(&out_lanes);
+            *jac_u_arrays = ::twv_kernels::lanes::gather_matrix(&jac_u_lanes);
+        }
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx512f,avx512vl")]
         unsafe fn kernel_variational_lanes_avx512(&self, #params) {
-            #avx512
+            #avx512_points
         }
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2")]
         unsafe fn kernel_variational_lanes_avx2(&self, #params) {
-            #avx2
+            #avx2_points
         }
         #[cfg(target_arch = "aarch64")]
         #[target_feature(enable = "neon")]
         fn kernel_variational_lanes_neon(&self, #params) {
+            #neon_points
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f,avx512vl")]
+        unsafe fn kernel_variational_lane_arrays_avx512(&self, #array_params) {
+            #avx512
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        unsafe fn kernel_variational_lane_arrays_avx2(&self, #array_params) {
+            #avx2
+        }
+        #[cfg(target_arch = "aarch64")]
+        #[target_feature(enable = "neon")]
+        fn kernel_variational_lane_arrays_neon(&self, #array_params) {
             #neon
         }
     })
@@ -586,6 +669,19 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                 jac_u: &mut [[f64; #nu]; #nx],
             ) {
                 self.kernel_variational(x, u, w, f, out, ::core::option::Option::Some(jac_u));
+            }
+
+            #[inline]
+            fn f_jw_jac_u_lane_arrays(
+                &self,
+                x: &[[f64; ::twv_kernels::lanes::LANES]; #nx],
+                u: &[[f64; ::twv_kernels::lanes::LANES]; #nu],
+                w: &[[f64; ::twv_kernels::lanes::LANES]; #nx],
+                f: &mut [[f64; ::twv_kernels::lanes::LANES]; #nx],
+                out: &mut [[f64; ::twv_kernels::lanes::LANES]; #nx],
+                jac_u: &mut [[[f64; ::twv_kernels::lanes::LANES]; #nu]; #nx],
+            ) {
+                self.kernel_variational_lane_arrays(x, u, w, f, out, jac_u);
             }
 
             #[inline]

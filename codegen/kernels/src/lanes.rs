@@ -105,6 +105,22 @@ pub fn scatter<const N: usize>(lanes: &[Lanes; N], rows: &mut [[f64; N]; LANES])
     }
 }
 
+/// [`gather`] for a matrix: `out[r][c][l] = rows[l][r][c]`.
+#[inline(always)]
+pub fn gather_matrix<const R: usize, const C: usize>(
+    rows: &[[[f64; C]; R]; LANES],
+) -> [[Lanes; C]; R] {
+    let mut out = [[[0.0; LANES]; C]; R];
+    for (l, matrix) in rows.iter().enumerate() {
+        for (out_row, row) in out.iter_mut().zip(matrix) {
+            for (lanes, v) in out_row.iter_mut().zip(row) {
+                lanes[l] = *v;
+            }
+        }
+    }
+    out
+}
+
 /// [`scatter`] for a matrix: `out[l][r][c] = lanes[r][c][l]`.
 #[inline(always)]
 pub fn scatter_matrix<const R: usize, const C: usize>(

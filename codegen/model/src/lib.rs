@@ -147,6 +147,46 @@ pub trait Model<const NX: usize, const NU: usize> {
         }
     }
 
+    /// [`f_jw_jac_u_lanes`](Self::f_jw_jac_u_lanes) on lane arrays: entry `i` of point `l` is
+    /// `x[i][l]` (and so for every argument), the form a caller that keeps its points that way
+    /// passes without transposing. The default transposes around `f_jw_jac_u_lanes`; generated
+    /// code runs its lanes kernel on the arrays directly. The bits of the one-point call.
+    fn f_jw_jac_u_lane_arrays(
+        &self,
+        x: &[[f64; LANES]; NX],
+        u: &[[f64; LANES]; NU],
+        w: &[[f64; LANES]; NX],
+        f: &mut [[f64; LANES]; NX],
+        out: &mut [[f64; LANES]; NX],
+        jac_u: &mut [[[f64; LANES]; NU]; NX],
+    ) {
+        let point = |l: usize| -> ([f64; NX], [f64; NU], [f64; NX]) {
+            (
+                core::array::from_fn(|i| x[i][l]),
+                core::array::from_fn(|k| u[k][l]),
+                core::array::from_fn(|i| w[i][l]),
+            )
+        };
+        let (mut xl, mut ul, mut wl) = ([[0.0; NX]; LANES], [[0.0; NU]; LANES], [[0.0; NX]; LANES]);
+        for l in 0..LANES {
+            (xl[l], ul[l], wl[l]) = point(l);
+        }
+        let (mut fl, mut ol, mut jl) = (
+            [[0.0; NX]; LANES],
+            [[0.0; NX]; LANES],
+            [[[0.0; NU]; NX]; LANES],
+        );
+        self.f_jw_jac_u_lanes(&xl, &ul, &wl, &mut fl, &mut ol, &mut jl);
+        for l in 0..LANES {
+            for i in 0..NX {
+                (f[i][l], out[i][l]) = (fl[l][i], ol[l][i]);
+                for k in 0..NU {
+                    jac_u[i][k][l] = jl[l][i][k];
+                }
+            }
+        }
+    }
+
     /// `out[k] = (∂f/∂x) w[k]` without ẋ.
     fn jw<const K: usize>(
         &self,

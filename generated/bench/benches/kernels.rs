@@ -261,18 +261,43 @@ fn main() -> ExitCode {
             black_box((&mut f, &mut out, &mut ju));
         })
     };
+    // The same on lane arrays (entry-major), the form the maps' driver keeps its points in:
+    // no transposes in or out.
+    let arrays = || {
+        time(plan, || {
+            let (x, u) = (
+                twv_kernels::lanes::gather(&[pt.x; L]),
+                [[pt.u[0]; L], [pt.u[1]; L]],
+            );
+            let w = twv_kernels::lanes::gather(&[pt.w[0]; L]);
+            let (mut f, mut out, mut ju) = ([[0.0; L]; NX], [[0.0; L]; NX], [[[0.0; L]; 2]; NX]);
+            black_box(&runtime).f_jw_jac_u_lane_arrays(
+                black_box(&x),
+                black_box(&u),
+                black_box(&w),
+                &mut f,
+                &mut out,
+                &mut ju,
+            );
+            black_box((&mut f, &mut out, &mut ju));
+        })
+    };
     println!();
     println!(
         "closed-loop stage kernel (f, J·w for one w, ∂f/∂u): one point per call {one} ns; \
-         {L} lanes per call, each build this CPU can run:"
+         {L} lanes per call (one array per point | lane arrays, as the maps call it), each build \
+         this CPU can run:"
     );
     each_build(|isa| {
-        let t = lanes();
+        let (t, a) = (lanes(), arrays());
         println!(
-            "  {}: {t} ns ({:.1} ns per point, {:.2}× one point per call)",
+            "  {}: {t} ns | {a} ns ({:.1} | {:.1} ns per point, {:.2}× | {:.2}× one point per \
+             call)",
             isa.name(),
             t.median / L as f64,
-            one.median * L as f64 / t.median
+            a.median / L as f64,
+            one.median * L as f64 / t.median,
+            one.median * L as f64 / a.median
         );
     });
 

@@ -76,8 +76,8 @@ macro_rules! both_builds_agree {
 }
 
 /// Every lane of the lanes kernel, in the build of the instruction set in force, against the
-/// one-point kernel at that lane's point (and the baseline lanes), K = 1 with ∂f/∂u, at 100
-/// random batches of 8 points.
+/// one-point kernel at that lane's point (and the baseline lanes, and the lane-arrays form),
+/// K = 1 with ∂f/∂u, at 100 random batches of 8 points.
 macro_rules! lanes_agree_with_one_point {
     ($m:expr, $nx:literal, $nu:literal, $what:expr) => {{
         use twv_kernels::lanes::LANES;
@@ -91,18 +91,31 @@ macro_rules! lanes_agree_with_one_point {
             }
             let w: [[f64; $nx]; LANES] =
                 std::array::from_fn(|_| std::array::from_fn(|_| rng.gen_range(-1.0..1.0)));
-            let mut f = [[[0.0; $nx]; LANES]; 2];
-            let mut out = [[[0.0; $nx]; LANES]; 2];
-            let mut ju = [[[[0.0; $nu]; $nx]; LANES]; 2];
+            let mut f = [[[0.0; $nx]; LANES]; 3];
+            let mut out = [[[0.0; $nx]; LANES]; 3];
+            let mut ju = [[[[0.0; $nu]; $nx]; LANES]; 3];
             {
-                let ([f0, f1], [o0, o1], [j0, j1]) = (&mut f, &mut out, &mut ju);
+                let ([f0, f1, f2], [o0, o1, o2], [j0, j1, j2]) = (&mut f, &mut out, &mut ju);
                 m.kernel_variational_lanes(&x, &u, &w, f0, o0, j0);
                 m.kernel_variational_lanes_baseline(&x, &u, &w, f1, o1, j1);
+                // The lane-arrays form (entry-major, the maps' driver's), transposed back.
+                use twv_kernels::lanes::{gather, gather_matrix, scatter, scatter_matrix};
+                let (mut fa, mut oa) = ([[0.0; LANES]; $nx], [[0.0; LANES]; $nx]);
+                let mut ja = gather_matrix(j2);
+                m.kernel_variational_lane_arrays(
+                    &gather(&x),
+                    &gather(&u),
+                    &gather(&w),
+                    &mut fa,
+                    &mut oa,
+                    &mut ja,
+                );
+                (scatter(&fa, f2), scatter(&oa, o2), scatter_matrix(&ja, j2));
             }
             for l in 0..LANES {
                 let (mut f1, mut o1, mut j1) = ([0.0; $nx], [[0.0; $nx]; 1], [[0.0; $nu]; $nx]);
                 m.kernel_variational(&x[l], &u[l], &w[l..=l], &mut f1, &mut o1, Some(&mut j1));
-                for build in 0..2 {
+                for build in 0..3 {
                     let tag = format!("{what} lanes (build {build}) lane {l}");
                     assert_bits(&f[build][l], &f1, &format!("{tag} f"));
                     assert_bits(&out[build][l], &o1[0], &format!("{tag} J·w"));

@@ -1,15 +1,16 @@
-//! The closed loops of [`LANES`] grid points evaluated together, for the maps: the model runs
-//! through its lanes kernel ([`Model::f_jw_jac_u_lanes`]) and the laws either one loop after
-//! the other (any controller) or, for the maps' common case of a plain PD law, as lane arrays.
+//! The closed loops of [`LANES`] grid points evaluated together, for the maps, on lane arrays
+//! ([`LaneStates`]): the model runs through its lanes kernel
+//! ([`Model::f_jw_jac_u_lane_arrays`]) and the laws either one loop after the other (any
+//! controller) or, for the maps' common case of a plain PD law, as lane arrays.
 //! Every lane has the bits of [`VectorField::eval`](crate::integrate::VectorField::eval) of its
 //! loop alone (`tests/tests/all/sweep_lanes.rs` checks each case).
 
 use twv_kernels::lanes::{Lanes, LANES};
 use twv_model::Model;
 
-use super::{PidLoop, Tangent};
+use super::PidLoop;
 use crate::control::settings::Setpoint;
-use crate::integrate::VarState;
+use crate::integrate::LaneStates;
 
 /// Eight closed loops of one model, evaluated together with one tangent vector each.
 pub struct LoopLanes<'a, M, const NX: usize, const NU: usize, const NA: usize> {
@@ -73,67 +74,71 @@ where
     }
 
     /// [`VectorField::eval`](crate::integrate::VectorField::eval) with one tangent vector for
-    /// every loop at once (loop `l` at time `t[l]` and `y[l]` → `dy[l]`, no trace).
+    /// every loop at once (loop `l` at time `t[l]` and point `l` of `y` → point `l` of `dy`),
+    /// all on lane arrays: the laws (for a plain PD law), the lanes kernel and the assembly of
+    /// the closed loop's derivatives are whole-lane operations.
     #[inline(always)]
     pub fn eval(
         &self,
         t: &[f64; LANES],
-        y: &[VarState<NA, 1>; LANES],
-        dy: &mut [VarState<NA, 1>; LANES],
+        y: &LaneStates<NA, LANES>,
+        dy: &mut LaneStates<NA, LANES>,
     ) {
-        let setpoints = self.setpoints(y);
-        let mut u = [[0.0; NU]; LANES];
-        let mut zdot = [[0.0; 3]; LANES];
-        let mut tangent = [Tangent {
-            du: [0.0; NU],
-            dz: [0.0; 3],
-        }; LANES];
+        let setpoints = self.setpoints(&y.x[self.loops[0].plant.measured.phi]);
+        let mut u = [[0.0; LANES]; NU];
+        let mut du = [[0.0; LANES]; NU];
         match &self.pd {
-            Some(pd) => (u, tangent) = pd.eval(y, &setpoints),
+            Some(pd) => pd.eval(y, &setpoints, &mut u, &mut du),
             None => {
-                for (l, (lp, y)) in self.loops.iter().zip(y).enumerate() {
+                for (l, lp) in self.loops.iter().enumerate() {
+                    let point = y.point(l);
                     // Reduced at once to what is needed later: copying eight whole laws (their
                     // gradient rows) costs more than the model itself.
-                    let law = lp.law_at::<true>(t[l], &y.x, setpoints[l]);
-                    u[l] = law.cmd.u;
-                    zdot[l] = law.zdot;
-                    tangent[l] = lp.tangent(&law, &y.w[0]);
+                    let law = lp.law_at::<true>(t[l], &point.x, setpoints[l]);
+                    let tangent = lp.tangent(&law, &point.w[0]);
+                    for k in 0..NU {
+                        (u[k][l], du[k][l]) = (law.cmd.u[k], tangent.du[k]);
+                    }
+                    for (iz, slot) in lp.slots() {
+                        if let Some(iz) = iz {
+                            (dy.x[iz][l], dy.w[iz][l]) = (law.zdot[slot], tangent.dz[slot]);
+                        }
+                    }
                 }
             }
         }
-        // Filled in place: built by `array::from_fn`, each was assembled aside and then copied.
-        let (mut x, mut w) = ([[0.0; NX]; LANES], [[0.0; NX]; LANES]);
-        for l in 0..LANES {
-            x[l].copy_from_slice(&y[l].x[..NX]);
-            w[l].copy_from_slice(&y[l].w[0][..NX]);
-        }
-        let (mut fx, mut jwx) = ([[0.0; NX]; LANES], [[0.0; NX]; LANES]);
-        let mut b = [[[0.0; NU]; NX]; LANES];
+        let x: &[Lanes; NX] = y.x[..NX].try_into().expect("NX ≤ NA");
+        let w: &[Lanes; NX] = y.w[..NX].try_into().expect("NX ≤ NA");
+        let (fx, jwx): (&mut [Lanes; NX], &mut [Lanes; NX]) = (
+            (&mut dy.x[..NX]).try_into().expect("NX ≤ NA"),
+            (&mut dy.w[..NX]).try_into().expect("NX ≤ NA"),
+        );
+        let mut b = [[[0.0; LANES]; NU]; NX];
         self.loops[0]
             .model
-            .f_jw_jac_u_lanes(&x, &u, &w, &mut fx, &mut jwx, &mut b);
-        for (l, d) in dy.iter_mut().enumerate() {
-            let (tan, jwl) = (
-                core::slice::from_ref(&tangent[l]),
-                core::slice::from_ref(&jwx[l]),
-            );
-            self.loops[l].assemble::<1>(&zdot[l], tan, &fx[l], jwl, &b[l], &mut d.x, &mut d.w);
-            d.trace_integral = 0.0;
+            .f_jw_jac_u_lane_arrays(x, &u, w, fx, jwx, &mut b);
+        // J·w of the loop: the model's plus ∂f/∂u · ∂u/∂x·w, the dot product as `assemble`
+        // forms it (every term added to `-0.0`, the start of `f64`'s `Sum`).
+        for (out, b) in jwx.iter_mut().zip(&b) {
+            for l in 0..LANES {
+                let mut sum = -0.0;
+                for k in 0..NU {
+                    sum += b[k][l] * du[k][l];
+                }
+                out[l] += sum;
+            }
         }
     }
 
-    /// Each loop's setpoint at its Φ, as [`Setpoint::eval`] gives it, with the sines of all
-    /// eight from one lane-wise sincos (the same bits) when any loop's setpoint needs one.
+    /// Each loop's setpoint at its Φ (`phi`), as [`Setpoint::eval`] gives it, with the sines of
+    /// all eight from one lane-wise sincos (the same bits) when any loop's setpoint needs one.
     #[inline(always)]
-    fn setpoints(&self, y: &[VarState<NA, 1>; LANES]) -> [(f64, f64); LANES] {
-        let phi_at = self.loops[0].plant.measured.phi;
-        // Not `y.map`: that copies the eight whole states first.
-        let phi: Lanes = core::array::from_fn(|l| y[l].x[phi_at]);
+    fn setpoints(&self, phi: &Lanes) -> [(f64, f64); LANES] {
         let sine = |l: &PidLoop<'a, M, NX, NU, NA>| {
             matches!(l.settings.pitch.setpoint, Setpoint::Sine { .. })
         };
         let (s, c) = if self.loops.iter().any(sine) {
-            twv_kernels::lanes::sin_cos(phi)
+            twv_kernels::lanes::sin_cos(*phi)
         } else {
             ([0.0; LANES], [0.0; LANES])
         };
@@ -150,19 +155,20 @@ where
 }
 
 impl<const NU: usize> PdLanes<NU> {
-    /// u and ∂u/∂x·w of every lane. The operations of [`PidLoop::law_at`] and
-    /// [`PidLoop::tangent`] for this law, entry by entry in the same order, with the gradient
-    /// rows never stored: row entries that are zero there are the same `+0` here, and the dot
-    /// products still add every term from `-0.0` (the start of `f64`'s `Sum`), so even the signs
-    /// of zeros and NaNs come out as in the one-loop path.
+    /// u and ∂u/∂x·w of every lane (`u[k][l]`, `du[k][l]`). The operations of
+    /// [`PidLoop::law_at`] and [`PidLoop::tangent`] for this law, entry by entry in the same
+    /// order, with the gradient rows never stored: row entries that are zero there are the same
+    /// `+0` here, and the dot products still add every term from `-0.0` (the start of `f64`'s
+    /// `Sum`), so even the signs of zeros and NaNs come out as in the one-loop path.
     #[inline(always)]
     fn eval<const NA: usize>(
         &self,
-        y: &[VarState<NA, 1>; LANES],
+        y: &LaneStates<NA, LANES>,
         setpoints: &[(f64, f64); LANES],
-    ) -> ([[f64; NU]; LANES], [Tangent<NU>; LANES]) {
-        let phi: Lanes = core::array::from_fn(|l| y[l].x[self.phi]);
-        let rate: Lanes = core::array::from_fn(|l| y[l].x[self.rate]);
+        u: &mut [Lanes; NU],
+        du: &mut [Lanes; NU],
+    ) {
+        let (phi, rate) = (&y.x[self.phi], &y.x[self.rate]);
         let mut force = [0.0; LANES];
         let mut saturated = [false; LANES];
         let mut de_phi = [0.0; LANES];
@@ -185,7 +191,7 @@ impl<const NU: usize> PdLanes<NU> {
             };
         }
         let (mut d_force_w, mut d_yaw_w) = ([-0.0; LANES], [-0.0; LANES]);
-        for j in 0..NA {
+        for (j, w) in y.w.iter().enumerate() {
             for l in 0..LANES {
                 let de = if j == self.phi { de_phi[l] } else { 0.0 };
                 let mut d_cmd = 0.0 + self.kp[l] * de;
@@ -194,18 +200,16 @@ impl<const NU: usize> PdLanes<NU> {
                 }
                 // The gradient of F: the command's, zero while saturated.
                 let d_force = if saturated[l] { 0.0 } else { d_cmd };
-                let w = y[l].w[0][j];
-                d_force_w[l] += d_force * w;
-                d_yaw_w[l] += 0.0 * w;
+                d_force_w[l] += d_force * w[l];
+                d_yaw_w[l] += 0.0 * w[l];
             }
         }
         let (fdir, ydir) = (&self.force_dir, &self.yaw_dir);
-        let u =
-            core::array::from_fn(|l| core::array::from_fn(|k| fdir[k] * force[l] + ydir[k] * 0.0));
-        let tangent = core::array::from_fn(|l| Tangent {
-            du: core::array::from_fn(|k| fdir[k] * d_force_w[l] + ydir[k] * d_yaw_w[l]),
-            dz: [0.0; 3],
-        });
-        (u, tangent)
+        for k in 0..NU {
+            for l in 0..LANES {
+                u[k][l] = fdir[k] * force[l] + ydir[k] * 0.0;
+                du[k][l] = fdir[k] * d_force_w[l] + ydir[k] * d_yaw_w[l];
+            }
+        }
     }
 }
