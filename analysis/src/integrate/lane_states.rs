@@ -69,6 +69,18 @@ impl<const N: usize, const L: usize> LaneStates<N, L> {
     }
 }
 
+/// `row` as an opaque address, so that a loop over rows handles one whole row (all its lanes)
+/// per vector operation: otherwise the optimiser vectorises such loops across the rows, one
+/// lane of eight rows gathered into a vector and the results scattered back (352 gather and
+/// scatter instructions in the AVX-512 build of the maps' driver, most of its own time).
+/// The callers read the rows they need into values before writing a result row whole: an
+/// opaque address may alias any other, so lane-by-lane writes through it would force every
+/// later read to be redone, lane by lane.
+#[inline(always)]
+pub(crate) fn one_row<T>(row: T) -> T {
+    core::hint::black_box(row)
+}
+
 /// The stage derivatives of `L` points at once (`t[l]`, `y` → `dy`). A trait rather than a
 /// closure so that an `#[inline(always)]` implementation is compiled into the caller's
 /// instruction-set build (a closure is a function of its own, built for the baseline when the
@@ -125,10 +137,13 @@ pub(crate) fn rk4_step_lanes<const N: usize, const L: usize>(
     // `y += h/6 (acc + k)` with a `v · 0` sum per point: finite → 0, else NaN.
     let mut check = [0.0; L];
     for ((s, a), k) in y.rows_mut().iter_mut().zip(acc.rows()).zip(k.rows()) {
+        let s = one_row(s);
+        let (mut row, a, k) = (*s, *a, *k);
         for l in 0..L {
-            s[l] += sixth[l] * (a[l] + k[l]);
-            check[l] += s[l] * 0.0;
+            row[l] += sixth[l] * (a[l] + k[l]);
+            check[l] += row[l] * 0.0;
         }
+        *s = row;
     }
     let mut finite = [false; L];
     for l in 0..L {
@@ -149,13 +164,16 @@ fn stage<const N: usize, const L: usize>(
 ) {
     let rows = acc.rows_mut().iter_mut().zip(tmp.rows_mut());
     for ((a, s), (y, k)) in rows.zip(y.rows().iter().zip(k.rows())) {
+        let (a, s) = (one_row(a), one_row(s));
+        let (mut sum, mut point, y, k) = (*a, [0.0; L], *y, *k);
         for l in 0..L {
             if first {
-                a[l] = k[l];
+                sum[l] = k[l];
             } else {
-                a[l] += 2.0 * k[l];
+                sum[l] += 2.0 * k[l];
             }
-            s[l] = y[l] + c[l] * k[l];
+            point[l] = y[l] + c[l] * k[l];
         }
+        (*a, *s) = (sum, point);
     }
 }

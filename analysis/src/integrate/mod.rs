@@ -37,7 +37,7 @@ pub use dopri5::{Dopri5, DopriOptions};
 pub use error::{BlowUpPart, IntegrateError};
 pub use field::VectorField;
 pub use lane_states::LaneStates;
-pub(crate) use lane_states::{rk4_step_lanes, LaneField, LaneRk4Scratch};
+pub(crate) use lane_states::{one_row, rk4_step_lanes, LaneField, LaneRk4Scratch};
 pub use linear_feedback::LinearStateFeedback;
 pub use open_loop::OpenLoop;
 pub use projected::{project, Projected};

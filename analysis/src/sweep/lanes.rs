@@ -24,8 +24,8 @@ use super::point::{PointResult, Status};
 use super::settle::{at_rest, tail_log_growth};
 use crate::control::{loop_states, LoopLanes, PidLoop};
 use crate::integrate::{
-    equal_steps, eval_stage, rk4_step_lanes, LaneField, LaneRk4Scratch, LaneStates, Projected,
-    VarState,
+    equal_steps, eval_stage, one_row, rk4_step_lanes, LaneField, LaneRk4Scratch, LaneStates,
+    Projected, VarState,
 };
 use crate::lyapunov::{initial_basis, orthonormalize, InitialBasis, IntervalEnds};
 
@@ -131,11 +131,14 @@ where
         self.group.eval(t, y, dy);
         // `project` lane by lane: a dropped coordinate becomes +0.
         for (w, keep) in dy.w.iter_mut().zip(self.keep) {
+            let w = one_row(w);
+            let mut row = *w;
             for l in 0..L {
                 if !keep[l] {
-                    w[l] = 0.0;
+                    row[l] = 0.0;
                 }
             }
+            *w = row;
         }
     }
 }

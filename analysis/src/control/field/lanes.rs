@@ -10,13 +10,16 @@ use twv_model::Model;
 
 use super::PidLoop;
 use crate::control::settings::Setpoint;
-use crate::integrate::LaneStates;
+use crate::integrate::{one_row, LaneStates};
 
 /// Eight closed loops of one model, evaluated together with one tangent vector each.
 pub struct LoopLanes<'a, M, const NX: usize, const NU: usize, const NA: usize> {
     loops: [PidLoop<'a, M, NX, NU, NA>; LANES],
     /// The laws as lane arrays, when every loop is a plain PD law of the same plant.
     pd: Option<PdLanes<NU>>,
+    /// Whether any loop's setpoint is a sine of Φ (kept up to date by `set`, not looked up at
+    /// every stage).
+    sine: bool,
 }
 
 /// A plain PD law (no controller state, no outer loop) at eight loops of one plant:
@@ -38,14 +41,20 @@ where
 {
     /// The loops `loops`, all of the same model.
     pub fn new(loops: [PidLoop<'a, M, NX, NU, NA>; LANES]) -> Self {
-        let pd = Self::pd_lanes(&loops);
-        Self { loops, pd }
+        let (pd, sine) = (Self::pd_lanes(&loops), Self::any_sine(&loops));
+        Self { loops, pd, sine }
     }
 
     /// Lane `lane` runs `lp` from now on (a loop of the same model).
     pub fn set(&mut self, lane: usize, lp: PidLoop<'a, M, NX, NU, NA>) {
         self.loops[lane] = lp;
         self.pd = Self::pd_lanes(&self.loops);
+        self.sine = Self::any_sine(&self.loops);
+    }
+
+    /// Whether any of `loops` has a sine setpoint.
+    fn any_sine(loops: &[PidLoop<'a, M, NX, NU, NA>; LANES]) -> bool {
+        (loops.iter()).any(|l| matches!(l.settings.pitch.setpoint, Setpoint::Sine { .. }))
     }
 
     /// The lane-array PD law of `loops`, if every one is a plain PD law of the same plant.
@@ -120,13 +129,16 @@ where
         // J·w of the loop: the model's plus ∂f/∂u · ∂u/∂x·w, the dot product as `assemble`
         // forms it (every term added to `-0.0`, the start of `f64`'s `Sum`).
         for (out, b) in jwx.iter_mut().zip(&b) {
+            let out = one_row(out);
+            let mut row = *out;
             for l in 0..LANES {
                 let mut sum = -0.0;
                 for k in 0..NU {
                     sum += b[k][l] * du[k][l];
                 }
-                out[l] += sum;
+                row[l] += sum;
             }
+            *out = row;
         }
     }
 
@@ -134,10 +146,7 @@ where
     /// all eight from one lane-wise sincos (the same bits) when any loop's setpoint needs one.
     #[inline(always)]
     fn setpoints(&self, phi: &Lanes) -> [(f64, f64); LANES] {
-        let sine = |l: &PidLoop<'a, M, NX, NU, NA>| {
-            matches!(l.settings.pitch.setpoint, Setpoint::Sine { .. })
-        };
-        let (s, c) = if self.loops.iter().any(sine) {
+        let (s, c) = if self.sine {
             twv_kernels::lanes::sin_cos(*phi)
         } else {
             ([0.0; LANES], [0.0; LANES])
@@ -192,6 +201,7 @@ impl<const NU: usize> PdLanes<NU> {
         }
         let (mut d_force_w, mut d_yaw_w) = ([-0.0; LANES], [-0.0; LANES]);
         for (j, w) in y.w.iter().enumerate() {
+            let w = *one_row(w);
             for l in 0..LANES {
                 let de = if j == self.phi { de_phi[l] } else { 0.0 };
                 let mut d_cmd = 0.0 + self.kp[l] * de;
