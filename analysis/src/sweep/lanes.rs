@@ -343,56 +343,45 @@ where
     drive_inline(group, loops, x0, s, indices)
 }
 
-/// [`drive_inline`] built for AVX-512: the laws, the RK4 combinations and the assembly of
-/// the loops' derivatives become 8-wide operations, and the lanes kernel is called within the
-/// same build. The same IEEE operations in the same order as the baseline build (Rust never
-/// fuses a multiply and an add), so the same bits; release builds only, as the RK4 steps'.
-///
-/// # Safety
-/// The CPU must have AVX-512F and AVX-512VL.
-#[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
-#[target_feature(enable = "avx512f,avx512vl")]
-unsafe fn drive_avx512<
-    'a,
-    G,
-    M,
-    const NX: usize,
-    const NU: usize,
-    const NA: usize,
-    const L: usize,
->(
-    group: G,
-    loops: &[PidLoop<'a, M, NX, NU, NA>],
-    x0: &[f64; NX],
-    s: &MetricSettings,
-    indices: &[usize],
-) -> Vec<PointResult>
-where
-    G: LoopGroup<'a, M, NX, NU, NA, L>,
-    M: Model<NX, NU>,
-{
-    drive_inline(group, loops, x0, s, indices)
+/// A build of [`drive_inline`] for the instruction sets `$features`, which the CPU must have.
+macro_rules! drive_build {
+    ($(#[$doc:meta])* $name:ident, $features:literal) => {
+        $(#[$doc])*
+        ///
+        /// # Safety
+        #[doc = concat!("The CPU must have ", $features, ".")]
+        #[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
+        #[target_feature(enable = $features)]
+        unsafe fn $name<'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize>(
+            group: G,
+            loops: &[PidLoop<'a, M, NX, NU, NA>],
+            x0: &[f64; NX],
+            s: &MetricSettings,
+            indices: &[usize],
+        ) -> Vec<PointResult>
+        where
+            G: LoopGroup<'a, M, NX, NU, NA, L>,
+            M: Model<NX, NU>,
+        {
+            drive_inline(group, loops, x0, s, indices)
+        }
+    };
 }
 
-/// The same for AVX2 (4-wide).
-///
-/// # Safety
-/// The CPU must have AVX2.
-#[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
-#[target_feature(enable = "avx2")]
-unsafe fn drive_avx2<'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize>(
-    group: G,
-    loops: &[PidLoop<'a, M, NX, NU, NA>],
-    x0: &[f64; NX],
-    s: &MetricSettings,
-    indices: &[usize],
-) -> Vec<PointResult>
-where
-    G: LoopGroup<'a, M, NX, NU, NA, L>,
-    M: Model<NX, NU>,
-{
-    drive_inline(group, loops, x0, s, indices)
-}
+drive_build!(
+    /// [`drive_inline`] built for AVX-512: the laws, the RK4 combinations and the assembly of
+    /// the loops' derivatives become 8-wide operations, and the lanes kernel is called within
+    /// the same build. The same IEEE operations in the same order as the baseline build (Rust
+    /// never fuses a multiply and an add), so the same bits; release builds only, as the RK4
+    /// steps'.
+    drive_avx512,
+    "avx512f,avx512vl"
+);
+drive_build!(
+    /// The same for AVX2 (4-wide).
+    drive_avx2,
+    "avx2"
+);
 
 /// [`drive`] written out, every step inlined: the body of its builds.
 #[inline(always)]
