@@ -107,7 +107,7 @@ impl<const N: usize, const L: usize> LaneRk4Scratch<N, L> {
 
 /// One RK4 step of the points `y`, point `l` from time `t[l]` with step `h[l]`; returns, per
 /// point, whether its new state and tangent are finite. The operations of
-/// `rk4_step_each` per point, in the same order.
+/// [`Rk4`](super::Rk4)'s step per point, in the same order.
 #[inline(always)]
 pub(crate) fn rk4_step_lanes<const N: usize, const L: usize>(
     t: &[f64; L],

@@ -23,7 +23,7 @@ pub struct Rk4<F, const N: usize, const K: usize> {
     trace: bool,
     steps: u64,
     y: VarState<N, K>,
-    scratch: Rk4Scratch<N, K, 1>,
+    scratch: Rk4Scratch<N, K>,
     /// Which build of the steps `advance_to` runs (timed on its first calls; the builds exist
     /// in release builds only).
     #[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
@@ -101,93 +101,50 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Rk4<F, N, K> {
         self.advance_to_inline(t_end)
     }
 
-    /// One RK4 step of size `h` from the current point; returns whether the new point is
-    /// finite.
+    /// One RK4 step of size `h` from the current point, in four fused passes over the state;
+    /// returns whether the new point is finite. Per point the operations of `rk4_step_lanes`
+    /// (the maps' lane arrays), so a point has the same bits in either form.
     #[inline(always)]
     fn rk4_step(&mut self, h: f64) -> bool {
-        let (field, trace) = (&self.field, self.trace);
-        let [finite] = rk4_step_each(
-            &[self.t],
-            &[h],
-            core::array::from_mut(&mut self.y),
-            &mut self.scratch,
-            |t, y, k| eval_stage(field, t[0], &y[0], trace, &mut k[0]),
-        );
-        finite
-    }
-}
-
-/// The stage derivatives, running sum and stage points of one RK4 step of `L` states.
-#[derive(Debug, Clone)]
-struct Rk4Scratch<const N: usize, const K: usize, const L: usize> {
-    k: [VarState<N, K>; L],
-    acc: [VarState<N, K>; L],
-    tmp: [VarState<N, K>; L],
-}
-
-impl<const N: usize, const K: usize, const L: usize> Rk4Scratch<N, K, L> {
-    const ZERO: Self = Self {
-        k: [VarState::ZERO; L],
-        acc: [VarState::ZERO; L],
-        tmp: [VarState::ZERO; L],
-    };
-}
-
-/// One RK4 step for `L` independent states `y`, state `l` from time `t[l]` with step `h[l]`,
-/// in four fused passes over each; `eval(times, states, derivatives)` gives the stage
-/// derivatives of all `L` at once. Per state these are the same operations whatever `L` is and
-/// whatever the others' times, and those of `rk4_step_lanes` (the maps' lane arrays) per
-/// point, so a point has the same bits in every form. Returns, per state, whether its new
-/// point is finite.
-#[inline(always)]
-fn rk4_step_each<const N: usize, const K: usize, const L: usize>(
-    t: &[f64; L],
-    h: &[f64; L],
-    y: &mut [VarState<N, K>; L],
-    scratch: &mut Rk4Scratch<N, K, L>,
-    mut eval: impl FnMut(&[f64; L], &[VarState<N, K>; L], &mut [VarState<N, K>; L]),
-) -> [bool; L] {
-    let Rk4Scratch { k, acc, tmp } = scratch;
-    let mut half = [0.0; L];
-    let mut t_half = [0.0; L];
-    let mut t_end = [0.0; L];
-    for l in 0..L {
-        half[l] = 0.5 * h[l];
-        t_half[l] = t[l] + half[l];
-        t_end[l] = t[l] + h[l];
-    }
-    eval(t, y, k);
-    for l in 0..L {
-        let half = half[l];
-        acc[l].zip_pair(&mut tmp[l], &y[l], &k[l], |a, s, y, k| {
+        let (field, trace, t) = (&self.field, self.trace, self.t);
+        let Rk4Scratch { k, acc, tmp } = &mut self.scratch;
+        let y = &mut self.y;
+        let half = 0.5 * h;
+        let (t_half, t_end) = (t + half, t + h);
+        eval_stage(field, t, y, trace, k);
+        acc.zip_pair(tmp, y, k, |a, s, y, k| {
             *a = k;
             *s = y + half * k;
         });
-    }
-    eval(&t_half, tmp, k);
-    for l in 0..L {
-        let half = half[l];
-        acc[l].zip_pair(&mut tmp[l], &y[l], &k[l], |a, s, y, k| {
+        eval_stage(field, t_half, tmp, trace, k);
+        acc.zip_pair(tmp, y, k, |a, s, y, k| {
             *a += 2.0 * k;
             *s = y + half * k;
         });
-    }
-    eval(&t_half, tmp, k);
-    for l in 0..L {
-        let h = h[l];
-        acc[l].zip_pair(&mut tmp[l], &y[l], &k[l], |a, s, y, k| {
+        eval_stage(field, t_half, tmp, trace, k);
+        acc.zip_pair(tmp, y, k, |a, s, y, k| {
             *a += 2.0 * k;
             *s = y + h * k;
         });
+        eval_stage(field, t_end, tmp, trace, k);
+        y.add_sum_checked(h / 6.0, acc, k)
     }
-    eval(&t_end, tmp, k);
-    // A plain loop, not `array::from_fn`: its closure was compiled out of line, outside the
-    // AVX-512 and AVX2 builds of the steps (10 % of the study preset's time).
-    let mut finite = [false; L];
-    for l in 0..L {
-        finite[l] = y[l].add_sum_checked(h[l] / 6.0, &acc[l], &k[l]);
-    }
-    finite
+}
+
+/// The stage derivatives, running sum and stage points of one RK4 step.
+#[derive(Debug, Clone)]
+struct Rk4Scratch<const N: usize, const K: usize> {
+    k: VarState<N, K>,
+    acc: VarState<N, K>,
+    tmp: VarState<N, K>,
+}
+
+impl<const N: usize, const K: usize> Rk4Scratch<N, K> {
+    const ZERO: Self = Self {
+        k: VarState::ZERO,
+        acc: VarState::ZERO,
+        tmp: VarState::ZERO,
+    };
 }
 
 /// The equal steps from `t` to `t_stop` of at most about `h`: their number and size.
