@@ -17,9 +17,6 @@ pub struct LoopLanes<'a, M, const NX: usize, const NU: usize, const NA: usize> {
     loops: [PidLoop<'a, M, NX, NU, NA>; LANES],
     /// The laws as lane arrays, when every loop is a plain PD law of the same plant.
     pd: Option<PdLanes<NU>>,
-    /// Whether any loop's setpoint is a sine of Φ (kept up to date by `set`, not looked up at
-    /// every stage).
-    sine: bool,
 }
 
 /// A plain PD law (no controller state, no outer loop) at eight loops of one plant:
@@ -41,20 +38,14 @@ where
 {
     /// The loops `loops`, all of the same model.
     pub fn new(loops: [PidLoop<'a, M, NX, NU, NA>; LANES]) -> Self {
-        let (pd, sine) = (Self::pd_lanes(&loops), Self::any_sine(&loops));
-        Self { loops, pd, sine }
+        let pd = Self::pd_lanes(&loops);
+        Self { loops, pd }
     }
 
     /// Lane `lane` runs `lp` from now on (a loop of the same model).
     pub fn set(&mut self, lane: usize, lp: PidLoop<'a, M, NX, NU, NA>) {
         self.loops[lane] = lp;
         self.pd = Self::pd_lanes(&self.loops);
-        self.sine = Self::any_sine(&self.loops);
-    }
-
-    /// Whether any of `loops` has a sine setpoint.
-    fn any_sine(loops: &[PidLoop<'a, M, NX, NU, NA>; LANES]) -> bool {
-        (loops.iter()).any(|l| matches!(l.settings.pitch.setpoint, Setpoint::Sine { .. }))
     }
 
     /// The lane-array PD law of `loops`, if every one is a plain PD law of the same plant.
@@ -146,7 +137,10 @@ where
     /// all eight from one lane-wise sincos (the same bits) when any loop's setpoint needs one.
     #[inline(always)]
     fn setpoints(&self, phi: &Lanes) -> [(f64, f64); LANES] {
-        let (s, c) = if self.sine {
+        let sine = |l: &PidLoop<'a, M, NX, NU, NA>| {
+            matches!(l.settings.pitch.setpoint, Setpoint::Sine { .. })
+        };
+        let (s, c) = if self.loops.iter().any(sine) {
             twv_kernels::lanes::sin_cos(*phi)
         } else {
             ([0.0; LANES], [0.0; LANES])
