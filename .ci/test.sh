@@ -107,10 +107,18 @@ aarch64_pid=$!
 step "cargo test --doc"
 cargo test --workspace --doc --profile dev "${features[@]}"
 
-step "python package: build the extension into .venv (maturin), pytest python/tests"
-# --uv: the .venv's pinned uv installs the extension (pip resolving its dependencies took ~20 s).
-PATH="$PWD/.venv/bin:$PATH" VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --uv --quiet -m python/Cargo.toml
-TWV_BIN="$PWD/target/debug/twv" "$py" -m pytest -q -p no:cacheprovider python/tests
+# The book (mdBook, installed pinned into target/tools the first time) and its links: beside the
+# Python package's release build.
+step "docs: the book builds and every link resolves (in the background)"
+( bash .ci/docs-test.sh >target/docs-test.log 2>&1 ) &
+docs_pid=$!
+
+step "python package: a release build of the extension into .venv (maturin), pytest python/tests"
+# --release: the package a user finds in .venv is the optimised one (a debug build ran a 20 x 20
+# map ~20 times slower than the CLI); its tests check that it is (TWV_EXPECT_PROFILE). --uv: the
+# .venv's pinned uv installs the extension (pip resolving its dependencies took ~20 s).
+PATH="$PWD/.venv/bin:$PATH" VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release --uv --quiet -m python/Cargo.toml
+TWV_BIN="$PWD/target/debug/twv" TWV_EXPECT_PROFILE=release "$py" -m pytest -q -p no:cacheprovider python/tests
 
 step "the browser test: the page's plots and margins are the CLI's for the dragged gains (its log)"
 finish "the browser test" "$browser_pid" target/browser-test.log
@@ -120,6 +128,9 @@ finish "the compile-fail test" "$compile_fail_pid" target/compile-fail-test.log
 
 step "the Slurm cluster test: merged shards = unsharded map (its log)"
 finish "the Slurm cluster test" "$slurm_pid" target/slurm-test.log
+
+step "docs: the book and its links (its log)"
+finish "the docs test" "$docs_pid" target/docs-test.log
 
 step "aarch64 under qemu: the NEON lanes kernel has the one-point bits, twv the same bytes (its log)"
 finish "the aarch64 test" "$aarch64_pid" target/aarch64-test.log

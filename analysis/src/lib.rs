@@ -28,6 +28,7 @@ mod error;
 pub mod hand_file;
 pub mod hand_model;
 pub mod integrate;
+pub mod jobs;
 pub mod linear;
 pub mod lyapunov;
 pub mod machine;

@@ -109,3 +109,51 @@ mod tests {
         assert!(text.contains("baseline"), "{text}");
     }
 }
+
+/// Which twv this is: what `twv --version` and Python's `twv.build_info()` print.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct BuildInfo {
+    /// The crate version.
+    pub version: &'static str,
+    /// The git commit it was built from (`unknown` outside a repository).
+    pub commit: &'static str,
+    /// `release` (optimised) or `debug`.
+    pub profile: &'static str,
+    /// The architecture of the code.
+    pub arch: &'static str,
+    /// The kernels' instruction set in force (the best this CPU runs, or a `--isa` limit).
+    pub isa: &'static str,
+    /// Whether models without generated code are compiled to native code (the JIT).
+    pub jit: bool,
+}
+
+impl BuildInfo {
+    /// The build of the calling binary: its `commit` and whether it has the JIT.
+    pub fn new(commit: &'static str, jit: bool) -> Self {
+        Self {
+            version: env!("CARGO_PKG_VERSION"),
+            commit,
+            profile: if cfg!(debug_assertions) {
+                "debug"
+            } else {
+                "release"
+            },
+            arch: std::env::consts::ARCH,
+            isa: isa::current().name(),
+            jit,
+        }
+    }
+
+    /// One line: `0.1.0 (commit 1a2b3c4d5e6f, release build, x86_64, kernels AVX-512, JIT)`.
+    pub fn line(&self) -> String {
+        format!(
+            "{} (commit {}, {} build, {}, kernels {}, {})",
+            self.version,
+            self.commit,
+            self.profile,
+            self.arch,
+            self.isa,
+            if self.jit { "JIT" } else { "no JIT" }
+        )
+    }
+}

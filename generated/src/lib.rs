@@ -14,7 +14,7 @@ twv_macros::twv_model!(ir = "ir/segway7.json", name = Segway7);
 twv_macros::twv_model!(ir = "ir/lorenz.json", name = Lorenz);
 twv_macros::twv_model!(ir = "ir/henon_heiles.json", name = HenonHeiles);
 
-/// (model name, IR file text) of every shipped model, in the order of the DESIGN's table.
+/// (model name, IR file text) of every shipped model, in the order of docs/src/models.md.
 pub const MODELS: [(&str, &str); 5] = [
     ("vehicle8", include_str!("../ir/vehicle8.json")),
     ("vehicle7", include_str!("../ir/vehicle7.json")),

@@ -1,4 +1,4 @@
-"""Physics every correct vehicle model satisfies (DESIGN section 2), checked on the derived
+"""Physics every correct vehicle model satisfies (docs/src/conventions.md), checked on the derived
 equations for both parameter files."""
 
 import casadi as ca

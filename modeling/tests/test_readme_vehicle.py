@@ -1,6 +1,6 @@
-"""The README's example of a new vehicle (a rolling disc from bodies, joints and a generated
-rolling contact) runs as written, and is the same vehicle as the disc whose rolling constraints
-are typed in by hand (test_rolling_disc.py)."""
+"""The modeling guide's example of a new vehicle (docs/src/modeling.md: a rolling disc from
+bodies, joints and a generated rolling contact) runs as written, and is the same vehicle as the
+disc whose rolling constraints are typed in by hand (test_rolling_disc.py)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import casadi as ca
 import numpy as np
 from test_rolling_disc import CONTACT, VALUES
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+README = Path(__file__).resolve().parents[2] / "docs" / "src" / "modeling.md"
 
 
 def _example() -> str:
@@ -22,7 +22,7 @@ def _example() -> str:
 
 def test_the_readme_vehicle_is_the_hand_constrained_disc(capsys):
     scope: dict = {}
-    exec(compile(_example(), "README.md", "exec"), scope)  # noqa: S102 - the README's own code
+    exec(compile(_example(), "docs/src/modeling.md", "exec"), scope)  # noqa: S102 - the README's own code
     printed = capsys.readouterr().out
     model = scope["model"]
     names = [s.name for s in model.states]

@@ -45,9 +45,9 @@ def _triple(key: str, unit: str, kind: str, what: str) -> list[Param]:
     ]
 
 
-# The vehicle schema (DESIGN section 2). Every vehicle model declares all of them, in this order,
-# so that any vehicle parameter file runs with any vehicle model; a model that does not use a
-# parameter marks it "used": false in its IR.
+# The vehicle schema (docs/src/conventions.md). Every vehicle model declares all of them, in
+# this order, so that any vehicle parameter file runs with any vehicle model; a model that does
+# not use a parameter marks it "used": false in its IR.
 VEHICLE_PARAMS: list[Param] = [
     Param("m1", "kg", "mass", description="base mass (body + person)"),
     Param("m2", "kg", "mass", description="pendulum mass"),

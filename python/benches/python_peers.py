@@ -160,7 +160,7 @@ def main():
 
     # 3. The study-preset spectrum.
     x0 = [0.1, 0, 0, 0, 0, 0, 0, 0]
-    spec = lambda: twv.lyapunov_spectrum(model, x0, preset="paper", running=False)  # noqa: E731
+    spec = lambda: twv.lyapunov(model, x0, preset="paper", running=False)  # noqa: E731
     t_twv = best(spec, repeat=20)
     from lyapunov_peers import rk4_numpy_casadi
 

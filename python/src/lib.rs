@@ -93,7 +93,7 @@ fn interruptible<T: Send>(
     }
 }
 
-/// Runs the analysis `job` (spectrum, simulate, linear, tune, sweep, audit) on `model` with
+/// Runs the analysis `job` (any of the registry's, by name or alias) on `model` with
 /// `settings` (a JSON object); returns the result as JSON and its time series as CSV (or None).
 #[pyfunction]
 fn run(
@@ -105,6 +105,66 @@ fn run(
     let resolved = model.resolved();
     let out = interruptible(py, |progress| json::run(job, resolved, settings, progress))?;
     Ok((out.result, out.csv))
+}
+
+/// Runs `job` with its flat options (`options`, a JSON object {name: value}: the keyword
+/// arguments of the Python function) laid over `settings` (JSON, or the defaults); returns the
+/// result as JSON, its series as CSV (or None), its summary text and the message of a negative
+/// verdict (or None).
+#[pyfunction]
+#[pyo3(signature = (job, model, options, settings = None))]
+fn run_options(
+    py: Python<'_>,
+    job: &str,
+    model: &Model,
+    options: &str,
+    settings: Option<&str>,
+) -> PyResult<(String, Option<String>, String, Option<String>)> {
+    let resolved = model.resolved();
+    let out = interruptible(py, |progress| {
+        json::run_options(job, resolved, settings, options, progress)
+    })?;
+    Ok((out.result, out.csv, out.summary, out.negative))
+}
+
+/// The settings `job` runs with for these options (JSON), validated, without running it.
+#[pyfunction]
+#[pyo3(signature = (job, options, settings = None))]
+fn resolve_options(job: &str, options: &str, settings: Option<&str>) -> PyResult<String> {
+    json::resolve_options(job, settings, options).map_err(to_py)
+}
+
+/// Every job of the library's registry as JSON: name, aliases, summary and its options (name,
+/// kind, unit, help, default — the library's own).
+#[pyfunction]
+fn jobs() -> PyResult<String> {
+    #[derive(serde::Serialize)]
+    struct Job {
+        name: &'static str,
+        aliases: &'static [&'static str],
+        summary: &'static str,
+        options: Vec<twv_analysis::jobs::OptionInfo>,
+    }
+    let all: Vec<Job> = twv_analysis::jobs::registry()
+        .iter()
+        .map(|j| Job {
+            name: j.name(),
+            aliases: j.aliases(),
+            summary: j.summary(),
+            options: j.options(),
+        })
+        .collect();
+    json::to_text(&all).map_err(to_py)
+}
+
+/// Which build this is (version, commit, profile, architecture, kernels' ISA, JIT), as JSON.
+#[pyfunction]
+fn build_info() -> PyResult<String> {
+    let info = twv_analysis::machine::BuildInfo::new(
+        git_version::git_version!(args = ["--always", "--abbrev=12"], fallback = "unknown"),
+        true,
+    );
+    json::to_text(&info).map_err(to_py)
 }
 
 /// The points `start..stop` of a sweep, as JSON (a shard for an executor).
@@ -187,6 +247,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
         twv_analysis::sweep::SETTLED_TAIL_TOLERANCE,
     )?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(run_options, m)?)?;
+    m.add_function(wrap_pyfunction!(resolve_options, m)?)?;
+    m.add_function(wrap_pyfunction!(jobs, m)?)?;
+    m.add_function(wrap_pyfunction!(build_info, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_range, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_len, m)?)?;
     m.add_function(wrap_pyfunction!(default_settings, m)?)?;

@@ -235,6 +235,28 @@ impl Model {
             .collect()
     }
 
+    /// State units, in order (SI).
+    #[getter]
+    fn state_units(&self) -> Vec<String> {
+        self.resolved
+            .ir
+            .states()
+            .iter()
+            .map(|s| s.unit.clone())
+            .collect()
+    }
+
+    /// Input units, in order (SI).
+    #[getter]
+    fn input_units(&self) -> Vec<String> {
+        self.resolved
+            .ir
+            .inputs()
+            .iter()
+            .map(|s| s.unit.clone())
+            .collect()
+    }
+
     /// ẋ = f(x, u) for each row: shape (n, nx).
     #[pyo3(signature = (x, u = None))]
     fn f<'py>(

@@ -44,6 +44,6 @@ def test_an_explicit_model_from_python():
     assert model.f([1.0, 0.0]).tolist() == [0.0, -4.0]
     # A harmonic oscillator's exponents are zero: the verdict says neutral or not converged,
     # never chaotic.
-    s = twv.lyapunov_spectrum(model, [1.0, 0.0], iterations=1000)
+    s = twv.lyapunov(model, [1.0, 0.0], iterations=1000)
     assert np.all(np.abs(s.exponents) < 0.01)
     assert s.classification in ("neutral", "not_converged")

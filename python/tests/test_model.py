@@ -95,13 +95,13 @@ def test_parameters_from_a_dict_a_file_or_toml(vehicle8, tmp_path):
         (lambda m: twv.Model("vehicle8", params={"m1": 1e308}), "m1"),
         (lambda m: twv.Model("vehicle8", params={"I2": [1.0]}), "`I2` has 3 component(s)"),
         (lambda m: twv.Model(ir="/nonexistent.json"), "/nonexistent.json"),
-        (lambda m: twv.lyapunov_spectrum(m, [0.1] * 7), "x0"),
-        (lambda m: twv.lyapunov_spectrum(m, [0.1] * 8, h=-1.0), "h"),
-        (lambda m: twv.lyapunov_spectrum(m, [0.1] * 8, iterations=10**12), "iterations"),
-        (lambda m: twv.simulate(m, t_end=math.nan), "not finite"),
-        (lambda m: twv.tune(m, "dpm>=95"), "dpm"),
+        (lambda m: twv.lyapunov(m, [0.1] * 7), "x0"),
+        (lambda m: twv.lyapunov(m, [0.1] * 8, h=-1.0), "h"),
+        (lambda m: twv.lyapunov(m, [0.1] * 8, iterations=10**12), "iterations"),
+        (lambda m: twv.simulate(m, t_end=math.nan), "t_end"),
+        (lambda m: twv.tune(m, spec="dpm>=95"), "dpm"),
         (lambda m: twv.sweep(m, kp=(0, 1, 10**7), kd=(0, 1, 10**7)), "points"),
-        (lambda m: twv.pid(anti_windup="sometimes"), "anti_windup"),
+        (lambda m: twv.simulate(m, anti_windup="sometimes"), "anti_windup"),
     ],
 )
 def test_bad_input_is_a_twv_error_naming_it(vehicle8, call, message):
@@ -117,4 +117,4 @@ def test_error_kinds(vehicle8):
     with pytest.raises(twv.ModelError):
         twv.Model("vehicle9")
     with pytest.raises(twv.NumericalError):
-        twv.lyapunov_spectrum(twv.Model("lorenz"), [1e308, 1e308, 1e308])
+        twv.lyapunov(twv.Model("lorenz"), [1e308, 1e308, 1e308])

@@ -21,7 +21,9 @@ class Model:
     Model("vehicle8")                       shipped model; a vehicle gets its vehicle file
     Model(ir="my_model.json")               a model IR file (same bits as compiled code)
     Model(ir=ir_text_or_dict)               an IR in memory (what `derive` makes)
-    params="file.toml" | {"m2": 10.0, "I2": [0.8, 0.8, 0.03]}   a file, or values over the defaults
+    params="file.toml" | {"m2": 10.0, "I2": [0.8, 0.8, 0.03]} | {"I2_zz": 0.03}
+                                            a file, or values over the defaults, by file key
+                                            or by component name (what `m.params` gives)
     runtime="jit" | "interpreter"           how a model without generated code runs: compiled
                                             to native code when loaded (default), or interpreted
 
@@ -74,6 +76,14 @@ class Model:
         return self._native.inputs
 
     @property
+    def units(self) -> dict[str, str]:
+        """The unit of every state, input and parameter by name (SI, from the IR)."""
+        units = dict(zip(self.states, self._native.state_units, strict=True))
+        units |= dict(zip(self.inputs, self._native.input_units, strict=True))
+        units |= {name: unit for name, _, _, unit, _ in self._native.params}
+        return units
+
+    @property
     def nx(self) -> int:
         return len(self.states)
 
@@ -92,7 +102,8 @@ class Model:
 
     @property
     def params(self) -> dict[str, float]:
-        """Parameter values by IR name (`m2`, `I2_yy`), SI units."""
+        """Parameter values by IR name (`m2`, `I2_yy`), SI units; `Model(name, params=m.params)`
+        takes them back (as it takes a file's keys, `I2 = [Ixx, Iyy, Izz]`)."""
         return {name: value for name, _, _, _, value in self._native.params}
 
     def _u(self, u, n: int):

@@ -1,5 +1,6 @@
-"""Result objects: the job's JSON (exactly what `twv <job> --json` prints) as `.raw`, with the
-numbers a notebook wants as NumPy arrays."""
+"""Result objects: the job's JSON (exactly what `twv <job> --json` prints) as `.raw`, read as
+data — NumPy arrays (complex where the values are eigenvalues, matrices in their natural
+shape), named fields, units — with the summary `twv <job>` prints as their `repr`."""
 
 from __future__ import annotations
 
@@ -8,21 +9,27 @@ from typing import Any
 
 import numpy as np
 
+from ._gains import Gains
 
-class Result:
-    """A job's result. `raw` is the JSON object; keys are also attributes."""
 
-    def __init__(self, raw: dict[str, Any]):
-        self.raw = raw
-
-    def __getattr__(self, name: str):
+def _array(value: Any) -> Any:
+    """A list of numbers (or a rectangular list of such lists) as an array; anything else as
+    it is."""
+    if isinstance(value, list) and value and all(isinstance(v, int | float) for v in value):
+        return np.array(value, dtype=float)
+    if isinstance(value, list) and value and all(isinstance(v, list) for v in value):
         try:
-            return self.raw[name]
-        except KeyError:
-            raise AttributeError(name) from None
+            a = np.array(value, dtype=float)
+        except (TypeError, ValueError):
+            return value
+        return a
+    return value
 
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({', '.join(self.raw)})"
+
+def _complex(pairs) -> np.ndarray:
+    """[[re, im], …] (how the library writes complex numbers) as a complex array."""
+    a = np.asarray(pairs, dtype=float).reshape(-1, 2)
+    return a[:, 0] + 1j * a[:, 1]
 
 
 def _csv(text: str | None) -> tuple[list[str], np.ndarray]:
@@ -34,26 +41,68 @@ def _csv(text: str | None) -> tuple[list[str], np.ndarray]:
     return columns, (data if data is not None else np.zeros((0, len(columns))))
 
 
+def _pandas():
+    try:
+        import pandas
+    except ImportError:
+        raise ImportError("to_pandas() needs pandas: pip install pandas") from None
+    return pandas
+
+
+class Result:
+    """A job's result. `raw` is the JSON object; its keys are also attributes (lists of numbers
+    as arrays); `summary` is what `twv <job>` prints; `negative` the message of a negative
+    verdict (the CLI's exit status 3), None otherwise."""
+
+    def __init__(self, raw: Any, csv: str | None, summary: str, negative: str | None, model):
+        self.raw = raw
+        self.csv = csv
+        self.summary = summary
+        self.negative = negative
+        self._model = model
+
+    def __getattr__(self, name: str):
+        raw = self.__dict__.get("raw")
+        if isinstance(raw, dict) and name in raw:
+            return _array(raw[name])
+        raise AttributeError(name)
+
+    @property
+    def ok(self) -> bool:
+        """Whether the verdict is positive (or there is none to give)."""
+        return self.negative is None
+
+    def __repr__(self) -> str:
+        text = self.summary.strip()
+        if not text and isinstance(self.raw, dict):
+            text = ", ".join(self.raw)
+        body = "\n".join(f"  {line}" for line in text.splitlines())
+        return f"{type(self).__name__}(\n{body}\n)"
+
+
 class SpectrumResult(Result):
     """A Lyapunov spectrum: exponents λ1 ≥ … [1/s], batch-means stderr (1σ), Σλ, ⟨tr J⟩,
     Kaplan–Yorke dimension, the verdict, and the running estimates."""
 
-    def __init__(self, raw: dict[str, Any], csv: str | None):
-        super().__init__(raw)
-        columns, data = _csv(csv)
-        k = len(raw["exponents"])
+    def __init__(self, *args):
+        super().__init__(*args)
+        columns, data = _csv(self.csv)
+        k = len(self.raw["exponents"])
         self.t = data[:, 0] if data.size else np.zeros(0)
         """Time since the transient [s] of each running estimate."""
         self.running = data[:, 1 : 1 + k] if data.size else np.zeros((0, k))
-        """Running exponents, one row per re-orthonormalisation."""
+        """Running exponents [1/s], one row per re-orthonormalisation."""
         self.running_sum = data[:, 1 + k] if data.size else np.zeros(0)
+        self.columns = columns
 
     @property
     def exponents(self) -> np.ndarray:
+        """λ1 ≥ λ2 ≥ … [1/s]."""
         return np.array(self.raw["exponents"])
 
     @property
     def stderr(self) -> np.ndarray:
+        """Batch-means standard error of each exponent (1σ) [1/s]."""
         return np.array(self.raw["stderr"])
 
     @property
@@ -62,20 +111,38 @@ class SpectrumResult(Result):
         `not_converged` (the text is `raw["classification"]["text"]`)."""
         return self.raw["classification"]["kind"]
 
+    def to_pandas(self):
+        """The running estimates: one row per re-orthonormalisation."""
+        return _pandas().DataFrame(
+            np.column_stack([self.t, self.running])
+            if self.t.size
+            else np.zeros((0, len(self.columns) - 1)),
+            columns=self.columns[: 1 + self.running.shape[1]],
+        )
+
 
 class _SeriesResult(Result):
-    """A result with a time series: `columns`, `data`, `series[name]` and `t`."""
+    """A result with a time series: `columns`, `data`, `series[name]`, `t` and `units[name]`."""
 
-    def __init__(self, raw: dict[str, Any], csv: str | None):
-        super().__init__(raw)
-        self.columns, self.data = _csv(csv)
+    def __init__(self, *args):
+        super().__init__(*args)
+        self.columns, self.data = _csv(self.csv)
         self.series = {c: self.data[:, i] for i, c in enumerate(self.columns)}
         self.t = self.series.get("t", np.zeros(0))
+        units = {"t": "s"}
+        if self._model is not None:
+            units |= self._model.units
+        self.units = {c: units.get(c, "") for c in self.columns}
+        """Each column's unit (SI; empty where the model gives none)."""
+
+    def to_pandas(self):
+        """The samples, one row per sample, one column per series."""
+        return _pandas().DataFrame(self.data, columns=self.columns)
 
 
 class SimResult(_SeriesResult):
-    """A closed-loop run: the time series (`series[name]`, `t`), metrics, how it ended and
-    whether the pitch recovered."""
+    """A closed-loop run: the time series, metrics, how it ended and whether the pitch
+    recovered."""
 
     @property
     def recovered(self) -> bool:
@@ -83,20 +150,54 @@ class SimResult(_SeriesResult):
 
 
 class RideResult(_SeriesResult):
-    """An uncontrolled run: the time series (`series[name]`, `t`), how it ended and the
-    verdict on the watched state."""
+    """An uncontrolled run: the time series, how it ended and the verdict on the watched
+    state."""
 
     @property
     def verdict(self) -> str:
+        """`recovered`, `not_recovered`, `fell` or `undisturbed`."""
         return self.raw["verdict"]
 
 
 class LinearResult(Result):
-    """The linearisation: open-loop modes, the PID pitch loop (poles, margins) and the LQR."""
+    """The linearisation: A and B, the open-loop modes, the PID pitch loop (poles, margins) and
+    the LQR; `state_space()` gives (A, B, C, D), `to_control()` a python-control StateSpace."""
+
+    @property
+    def A(self) -> np.ndarray:
+        """∂f/∂x at the operating point (nx × nx)."""
+        return np.array(self.raw["a"], dtype=float)
+
+    @property
+    def B(self) -> np.ndarray:
+        """∂f/∂u at the operating point (nx × nu)."""
+        return np.array(self.raw["b"], dtype=float).reshape(len(self.raw["states"]), -1)
+
+    def state_space(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(A, B, C, D) with every state an output: C = I, D = 0."""
+        a, b = self.A, self.B
+        return a, b, np.eye(a.shape[0]), np.zeros((a.shape[0], b.shape[1]))
+
+    def to_control(self):
+        """The linearisation as a `control.StateSpace` with named states, inputs and outputs
+        (needs python-control: pip install control)."""
+        try:
+            import control
+        except ImportError:
+            raise ImportError("to_control() needs python-control: pip install control") from None
+        a, b, c, d = self.state_space()
+        states, inputs = self.raw["states"], self.raw["inputs"]
+        return control.ss(a, b, c, d, states=states, inputs=inputs, outputs=states)
+
+    @property
+    def open_loop_eigenvalues(self) -> np.ndarray:
+        """The open-loop eigenvalues [1/s], complex."""
+        return _complex([m["eigenvalue"] for m in self.raw["open_loop"]])
 
     @property
     def loop_poles(self) -> np.ndarray:
-        return np.array([complex(*p) for p in self.raw["pitch"]["loop_poles"]])
+        """The closed pitch loop's poles [1/s], complex."""
+        return _complex(self.raw["pitch"]["loop_poles"])
 
     @property
     def margins(self) -> dict[str, Any] | None:
@@ -104,8 +205,58 @@ class LinearResult(Result):
         return self.raw["pitch"]["margins"]
 
     @property
-    def lqr(self) -> dict[str, Any]:
-        return self.raw["lqr"]
+    def lqr(self) -> dict[str, Any] | None:
+        """The LQR of the cart–pendulum part: gain `k` and Riccati `p` as matrices, the
+        closed-loop `poles` (complex)."""
+        lqr = self.raw.get("lqr")
+        if lqr is None:
+            return None
+        return {
+            **lqr,
+            "k": np.array(lqr["k"], dtype=float),
+            "p": np.array(lqr["p"], dtype=float),
+            "poles": _complex(lqr["closed_loop_eigenvalues"]),
+        }
+
+
+class SteadyResult(Result):
+    """Eigenvalues of a steady motion's modes against speed: `speeds` [m/s], `eigenvalues`
+    (complex, one row per speed), `spectral_abscissa`, the stable ranges and, where they are
+    bounded by an oscillating pair and a real mode, `weave_speed` and `capsize_speed`."""
+
+    @property
+    def speeds(self) -> np.ndarray:
+        return np.array([p["speed"] for p in self.raw["points"]])
+
+    @property
+    def eigenvalues(self) -> np.ndarray:
+        """[speed, mode] complex eigenvalues [1/s]."""
+        return np.array([_complex(p["eigenvalues"]) for p in self.raw["points"]])
+
+    @property
+    def spectral_abscissa(self) -> np.ndarray:
+        return np.array([p["spectral_abscissa"] for p in self.raw["points"]])
+
+    @property
+    def weave_speed(self) -> float | None:
+        return self.raw["weave_speed"]
+
+    @property
+    def capsize_speed(self) -> float | None:
+        return self.raw["capsize_speed"]
+
+    @property
+    def stable_ranges(self) -> list[tuple[float, float]]:
+        return [tuple(r) for r in self.raw["stable_ranges"]]
+
+    def to_pandas(self):
+        """One row per speed: the real and imaginary part of each eigenvalue."""
+        ev = self.eigenvalues
+        data = {"speed": self.speeds}
+        for j in range(ev.shape[1] if ev.ndim == 2 else 0):
+            data[f"re_{j + 1}"] = ev[:, j].real
+            data[f"im_{j + 1}"] = ev[:, j].imag
+        return _pandas().DataFrame(data)
 
 
 class TuneResult(Result):
@@ -122,10 +273,24 @@ class TuneResult(Result):
         return self.raw["verdict"] == "met"
 
     @property
-    def gains(self) -> dict[str, float] | None:
-        """The certificate's gains (for an infeasible spec the best found), or None."""
+    def gains(self) -> Gains | None:
+        """The certificate's gains (for an infeasible spec the best found), or None; accepted as
+        `gains=` by every job."""
         cert = self.raw["result"]["certificate"]
-        return None if cert is None else cert["gains"]
+        return None if cert is None else Gains(**cert["gains"])
+
+
+class ExponentResult(Result):
+    """The closed loop's largest exponent over a short horizon: `value` [1/s], `resolution`
+    [1/s] and the `verdict` (stable, unstable, undecided, fell, failed)."""
+
+    @property
+    def value(self) -> float | None:
+        return self.raw["point"]["value"]
+
+    @property
+    def verdict(self) -> str:
+        return self.raw["verdict"]
 
 
 def _axis_values(axis: dict[str, Any]) -> np.ndarray:
@@ -137,18 +302,24 @@ def _axis_values(axis: dict[str, Any]) -> np.ndarray:
     return np.array([hi if i == n - 1 else lo + (hi - lo) * (i / (n - 1)) for i in range(n)])
 
 
-class SweepResult:
+class SweepResult(Result):
     """A map over a (Kp, Kd[, Ki]) grid and model parameters: `value[..., p2, p1, ki, kd, kp]`
     (the parameter axes in reverse order in front; NaN unless `status` is ok) and `status` of
     the same shape, with the axes `kp`, `kd`, `ki` and `params` ({name: values}); `settled_at`
     [s] where a max-Lyapunov run came to rest and was finished from its linearisation (NaN
     where it ran every step)."""
 
-    def __init__(self, settings: dict[str, Any], points: list[dict[str, Any]]):
-        self.settings = settings
-        self.points = points
-        grid = settings["grid"]
-
+    def __init__(self, raw, csv, summary, negative, model, settings=None):
+        super().__init__(raw, csv, summary, negative, model)
+        self.points = points = raw
+        self.settings = settings if settings is not None else {}
+        grid = self.settings.get("grid")
+        if grid is None:
+            grid = {
+                "kp": {"n": len({p["kp"] for p in points})},
+                "kd": {"n": len({p["kd"] for p in points})},
+                "ki": None,
+            }
         n_kp, n_kd = grid["kp"]["n"], grid["kd"]["n"]
         n_ki = grid["ki"]["n"] if grid.get("ki") else 1
         # The axes as the points have them (row-major: Kp fastest, then Kd, then Ki).
@@ -175,5 +346,23 @@ class SweepResult:
         self.settled_at = settled_at.reshape(shape)
         self.status = status.reshape(shape)
 
+    def to_pandas(self):
+        """One row per grid point: index, kp, ki, kd, value, status, settled_at."""
+        return _pandas().DataFrame(self.points)
+
     def __repr__(self) -> str:
-        return f"SweepResult({self.settings['metric']}, shape {self.value.shape})"
+        metric = self.settings.get("metric", "map")
+        return f"SweepResult({metric}, shape {self.value.shape}: {self.summary.strip()})"
+
+
+RESULTS: dict[str, type[Result]] = {
+    "lyapunov": SpectrumResult,
+    "simulate": SimResult,
+    "disturb": SimResult,
+    "ride": RideResult,
+    "linearize": LinearResult,
+    "steady": SteadyResult,
+    "tune": TuneResult,
+    "exponent": ExponentResult,
+}
+"""The result class of each job (the others: `Result`)."""

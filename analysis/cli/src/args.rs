@@ -1,22 +1,18 @@
-//! The command line's shape: one subcommand per job, raw arguments only (each command's file
-//! turns them into the library's settings).
+//! The command line's shape: a subcommand per job of the library's registry (its flags made
+//! from the job's options), plus the tools that are not jobs: `report`, `merge`, `serve`.
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Command, FromArgMatches, Parser};
 
-use crate::commands::{
-    audit::AuditArgs, codegen::CodegenArgs, disturb::DisturbArgs, eval::EvalArgs,
-    linear::LinearArgs, lyap::LyapArgs, merge::MergeArgs, phase::PhaseArgs, report::ReportArgs,
-    ride::RideArgs, serve::ServeArgs, sim::SimArgs, sweep::SweepArgs, tune::TuneArgs,
-};
+use crate::commands::{merge::MergeArgs, report::ReportArgs, serve::ServeArgs};
 
-/// twv: two-wheeled self-balancing vehicle dynamics — generated equations of motion, audit,
-/// Lyapunov spectra, control and reports.
+/// twv: two-wheeled vehicle dynamics — generated equations of motion, audit, Lyapunov
+/// spectra, control and reports.
 ///
 /// Exit status: 0 done; 1 error (one line naming the file, field or value); 2 command-line
 /// syntax error; 3 completed with a negative verdict (audit or report check failed,
 /// specification not met, pitch loop unstable); 130 interrupted.
 #[derive(Parser, Debug)]
-#[command(name = "twv", version, about, long_about)]
+#[command(name = "twv", about, long_about)]
 pub struct Cli {
     /// No progress bars and no informational lines on stderr (errors are still printed)
     #[arg(long, global = true)]
@@ -26,8 +22,6 @@ pub struct Cli {
     /// CPU has]
     #[arg(long, global = true, value_enum, value_name = "ISA")]
     pub isa: Option<IsaArg>,
-    #[command(subcommand)]
-    pub command: Command,
 }
 
 /// An instruction-set limit for `--isa`.
@@ -56,39 +50,30 @@ impl IsaArg {
     }
 }
 
-/// The jobs.
-#[derive(Subcommand, Debug)]
-pub enum Command {
-    /// Evaluate ẋ = f(x, u) (and its Jacobians) at one state; JSON on stdout
-    Eval(EvalArgs),
-    /// Print the Rust code generated from a model's IR, for people to read and audit
-    Codegen(CodegenArgs),
-    /// Audit the generated vehicle models against the independent hand model, or any model against your own (--hand)
-    Audit(AuditArgs),
-    /// Lyapunov spectrum (Benettin–QR) with running estimates, errors and Σλ = ⟨tr J⟩
-    Lyap(LyapArgs),
-    /// Closed-loop run of the PID pitch controller (tilt recovery or a maneuver): CSV, figures,
-    /// metrics
-    Sim(SimArgs),
-    /// Uncontrolled run under constant inputs, from a state or a steady motion at a speed (the
-    /// bicycle nobody steers): CSV, figures, whether the push died out
-    Ride(RideArgs),
-    /// Recovery from a forward or backward tilt under the study's PD (its Figs. 5 and 6)
-    Disturb(DisturbArgs),
-    /// Phase portraits (Φ, dΦ/dt) for several gain sets side by side (the study's Fig. 4), or
-    /// open loop under constant forces
-    Phase(PhaseArgs),
-    /// Linearisation at an equilibrium: modes, pitch-loop margins (gain, phase, disk), LQR
-    Linear(LinearArgs),
-    /// Fit PD/PID gains to a margin specification with Clarabel, with an independent certificate
-    Tune(TuneArgs),
-    /// Reproduce the study end to end into one HTML report (figures and data beside it)
-    Report(ReportArgs),
-    /// Stability map over PID gains (one shard of it; resumable; Slurm/Kubernetes arrays)
-    Sweep(SweepArgs),
-    /// Merge the shards of a sweep: check completeness, write map.csv, map.json, map.svg
-    Merge(MergeArgs),
-    /// A live page on 127.0.0.1: gains and parameters as sliders, the response, margins and
-    /// maps redrawn as they move, and its JSON API under /api/
-    Serve(ServeArgs),
+/// The whole command line: the jobs in the registry's order, then the tools.
+pub fn command(version: &'static str) -> Command {
+    let mut cmd = Cli::command().version(version).subcommand_required(true);
+    for job in twv_analysis::jobs::registry() {
+        cmd = cmd.subcommand(crate::commands::job_command(*job));
+    }
+    cmd.subcommand(ReportArgs::augment_args(Command::new("report").about(
+        "Reproduce the study end to end into one HTML report (figures and data beside it)",
+    )))
+    .subcommand(MergeArgs::augment_args(Command::new("merge").about(
+        "Merge the shards of a sweep: check completeness, write map.csv, map.json, map.svg",
+    )))
+    .subcommand(ServeArgs::augment_args(Command::new("serve").about(
+        "A live page on 127.0.0.1: gains and parameters as sliders, the response, margins and \
+         maps redrawn as they move, and its JSON API under /api/",
+    )))
 }
+
+/// The global flags of parsed matches.
+pub fn globals(m: &clap::ArgMatches) -> Cli {
+    Cli::from_arg_matches(m).unwrap_or(Cli {
+        quiet: false,
+        isa: None,
+    })
+}
+
+use clap::CommandFactory;

@@ -1,5 +1,7 @@
-//! The `twv` command line: a thin shell over the twv-analysis API. Each command turns its
-//! arguments into typed settings, calls the library, writes the result files and prints.
+//! The `twv` command line: a thin shell over the twv-analysis library. Every job of the
+//! library's registry is a subcommand whose flags are the job's options; the library lays them
+//! over its default settings, checks them and runs the job; this binary writes the files,
+//! prints the summary and turns the verdict into the exit status.
 //!
 //! Exit codes: 0 done; 1 an error (bad input, a failed run, an unwritable output), one line on
 //! stderr naming the file, field or value; 2 a command-line syntax error; 3 the run completed
@@ -9,13 +11,11 @@
 mod args;
 mod commands;
 mod common;
+mod job;
 mod progress;
 
 use std::process::ExitCode;
 
-use clap::Parser;
-
-use args::Cli;
 use common::{Context, Outcome};
 
 /// The study's vehicle and the Segway-like one, embedded so the binary runs from any folder;
@@ -24,9 +24,19 @@ use common::{Context, Outcome};
 const PAPER_TOML: &str = include_str!("../../../vehicles/paper.toml");
 const SEGWAY_TOML: &str = include_str!("../../../vehicles/segway.toml");
 
+/// Which build this is (`twv --version`, the same as Python's `twv.build_info()`).
+fn version() -> &'static str {
+    let info = twv_analysis::machine::BuildInfo::new(
+        git_version::git_version!(args = ["--always", "--abbrev=12"], fallback = "unknown"),
+        common::HAS_JIT,
+    );
+    Box::leak(info.line().into_boxed_str())
+}
+
 fn main() -> ExitCode {
     restore_default_sigpipe();
-    let cli = Cli::parse();
+    let matches = args::command(version()).get_matches();
+    let cli = args::globals(&matches);
     if let Some(limit) = cli.isa {
         let (wanted, used) = (limit.isa(), twv_kernels::isa::force(limit.isa()));
         if used != wanted && !cli.quiet {
@@ -39,7 +49,10 @@ fn main() -> ExitCode {
     }
     let ctx = Context::new(PAPER_TOML, SEGWAY_TOML, cli.quiet);
     common::install_interrupt_handler();
-    match commands::run(&cli.command, &ctx) {
+    let Some((name, sub)) = matches.subcommand() else {
+        return ExitCode::from(2);
+    };
+    match commands::run(name, sub, &ctx) {
         Ok(Outcome::Done) => ExitCode::SUCCESS,
         Ok(Outcome::Negative(message)) => {
             eprintln!("twv: {message}");

@@ -554,13 +554,13 @@ fn audit_of_a_users_hand_file() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// `twv linear --model whipple --speed LO:HI:STEP --out DIR`: the bicycle's eigenvalues against
+/// `twv steady --model whipple --speed LO:HI:STEP --out DIR`: the bicycle's eigenvalues against
 /// speed as CSV, figure and JSON; exit 3 when the grid holds no self-stable speed.
 #[test]
 fn linear_speed_sweep_of_the_bicycle() {
     let dir = scratch("speed");
     let out = twv(&[
-        "linear",
+        "steady",
         "--model",
         "whipple",
         "--speed",
@@ -582,19 +582,19 @@ fn linear_speed_sweep_of_the_bicycle() {
         assert!(dir.join(name).exists(), "{name}");
     }
     negative_with(
-        &twv(&["linear", "--model", "whipple", "--speed", "0:3:0.1"]),
+        &twv(&["steady", "--model", "whipple", "--speed", "0:3:0.1"]),
         &["whipple is nowhere self-stable on the grid"],
     );
     fails_with(
-        &twv(&["linear", "--model", "whipple", "--speed", "0:10"]),
-        &["--speed 0:10: expected LO:HI:STEP"],
+        &twv(&["steady", "--model", "whipple", "--speed", "0:10"]),
+        &["--speed: wants three numbers LO:HI:STEP"],
     );
     fails_with(
-        &twv(&["linear", "--model", "whipple", "--speed", "5:1:0.1"]),
+        &twv(&["steady", "--model", "whipple", "--speed", "5:1:0.1"]),
         &["--speed", "needs finite LO < HI"],
     );
     fails_with(
-        &twv(&["linear", "--model", "vehicle8", "--speed", "0:1:0.5"]),
+        &twv(&["steady", "--model", "vehicle8", "--speed", "0:1:0.5"]),
         &["vehicle8", "no steady motion"],
     );
     std::fs::remove_dir_all(&dir).unwrap();
@@ -729,15 +729,16 @@ fn sweep_over_model_parameters() {
         ]),
         &["`mass` is not a parameter of vehicle8"],
     );
-    fails_with(
-        &twv(&[
-            "sweep",
-            "--metric",
-            "spectral-abscissa",
-            "--out",
-            dir.join("bad").to_str().unwrap(),
-        ]),
-        &["--kp is required"],
+    // Without axes the map is the library's default grid, 100 × 100 (Kp 0…8000, Kd 0…4000).
+    let settings = twv(&["sweep", "--print-settings"]);
+    let grid: serde_json::Value = serde_json::from_slice(&settings.stdout).unwrap();
+    assert_eq!(
+        grid["grid"]["kp"],
+        serde_json::json!({"lo": 0.0, "hi": 8000.0, "n": 100})
+    );
+    assert_eq!(
+        grid["grid"]["kd"],
+        serde_json::json!({"lo": 0.0, "hi": 4000.0, "n": 100})
     );
     fails_with(
         &twv(&[
@@ -752,7 +753,7 @@ fn sweep_over_model_parameters() {
             "--out",
             dir.join("bad").to_str().unwrap(),
         ]),
-        &["--full-horizon applies to --metric max-lyapunov only"],
+        &["--full-horizon: applies to metric max-lyapunov only"],
     );
     assert!(
         !dir.join("bad").exists(),
@@ -796,4 +797,84 @@ fn linear_writes_bode_and_nyquist_figures() {
     let plain: serde_json::Value = serde_json::from_slice(&plain.stdout).unwrap();
     assert!(plain["pitch"].get("response").is_none());
     assert_eq!(plain["pitch"]["margins"], report["pitch"]["margins"]);
+}
+
+/// `twv <job> --print-settings` with no flags is the library's default settings for every job
+/// of the registry: the command line adds no default of its own.
+#[test]
+fn every_job_runs_the_librarys_default_settings() {
+    for job in twv_analysis::jobs::registry() {
+        let mut args = vec![job.name().to_string(), "--print-settings".to_string()];
+        let mut expected = job.default_settings();
+        for o in job.options().iter().filter(|o| o.required) {
+            args.push(format!("--{}", o.name.replace('_', "-")));
+            args.push("0.1,0,0".into());
+            expected[o.name] = serde_json::json!([0.1, 0.0, 0.0]);
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let out = twv(&args);
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let printed: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        if job.name() == "lyapunov" {
+            // The one thing the command line decides: running estimates only when written.
+            expected["lyapunov"]["record_running"] = false.into();
+        }
+        assert_eq!(printed, expected, "twv {}", job.name());
+        // And `--help` names every option with the library's default.
+        let help = twv(&[job.name(), "--help"]);
+        let help = String::from_utf8_lossy(&help.stdout);
+        for o in job.options() {
+            let flag = format!("--{}", o.name.replace('_', "-"));
+            assert!(
+                help.contains(&flag),
+                "twv {} --help: {flag} missing",
+                job.name()
+            );
+        }
+    }
+}
+
+/// No default is written in the command line's source: every one is the library's (a test, so
+/// that a default added to a flag later fails here).
+#[test]
+fn the_command_line_restates_no_default() {
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = vec![];
+    let mut dirs = vec![src];
+    while let Some(dir) = dirs.pop() {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                files.push(path);
+            }
+        }
+    }
+    assert!(files.len() >= 8, "{files:?}");
+    let numeric_default = |line: &str| {
+        ["unwrap_or(", "default_value_t", "default_value ="]
+            .iter()
+            .any(|pattern| {
+                line.find(pattern).is_some_and(|i| {
+                    let rest = line[i + pattern.len()..].trim_start_matches([' ', '=', '"']);
+                    pattern.starts_with("default") || rest.starts_with(|c: char| c.is_ascii_digit())
+                })
+            })
+    };
+    for path in files {
+        let text = std::fs::read_to_string(&path).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            assert!(
+                !numeric_default(line) || line.trim_start().starts_with("//"),
+                "{}:{}: a default written in the CLI: {line}",
+                path.display(),
+                n + 1
+            );
+        }
+    }
 }

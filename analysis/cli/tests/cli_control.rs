@@ -55,7 +55,7 @@ const MX: f64 = M1 + M2;
 const STUDY_KP: f64 = 3860.0;
 
 /// The upright pendulum's open-loop eigenvalue: λ² = m_p g l M_x / (I_p M_x − m_p² l²),
-/// I_p = I_y + m_p l² (DESIGN §2).
+/// I_p = I_y + m_p l² (docs/src/conventions.md).
 fn lambda() -> f64 {
     let ip = I2_YY + M2 * L * L;
     (M2 * G * L * MX / (ip * MX - M2 * M2 * L * L)).sqrt()
@@ -245,7 +245,7 @@ fn sim_below_kp_threshold_falls_over_and_says_so() {
 
 #[test]
 fn sim_kp_threshold_is_mx_g() {
-    // With Φ_ref = 0 the loop is stable iff Kp > M_x g = 1206.63 N/rad (DESIGN §2): just below
+    // With Φ_ref = 0 the loop is stable iff Kp > M_x g = 1206.63 N/rad (docs/src/conventions.md): just below
     // the tilt grows, just above it decays.
     let final_phi = |kp: f64| {
         let gains = format!("{kp},0,300");
@@ -480,7 +480,7 @@ fn malformed_gains_are_a_clear_error() {
         fails_with(&twv(cmd), &["--gains", "1,2", "Kp,Ki,Kd"]);
     }
     fails_with(&twv(&["sim", "--gains", "3860,x,1980"]), &["--gains", "x"]);
-    fails_with(&twv(&["tune", "--target", "1"]), &["--target", "Kp, Kd"]);
+    fails_with(&twv(&["tune", "--target", "1"]), &["--target", "Kp,Kd"]);
 }
 
 #[test]
@@ -546,7 +546,7 @@ fn non_positive_magnitude_and_times_are_rejected() {
     }
     fails_with(
         &twv(&["sim", "--lean-max", "0.05"]),
-        &["--lean-max", "--v-loop"],
+        &["--lean-max", "v_loop"],
     );
 }
 
@@ -634,7 +634,7 @@ fn every_control_subcommand_documents_its_options_with_units_and_defaults() {
         }),
         ("phase", {
             let mut v = run_options();
-            v.push(("--force", vec!["[N]"]));
+            v.push(("--force", vec!["[N, N m]"]));
             v.push(("--x0", vec!["default"]));
             v
         }),
@@ -642,8 +642,8 @@ fn every_control_subcommand_documents_its_options_with_units_and_defaults() {
             "linear",
             vec![
                 ("--at", vec!["upright", "hanging", "default: upright"]),
-                ("--gains", vec!["[N/rad", "default: 3860,0,1980"]),
-                ("--actuator-lag", vec!["[s]", "default: 0"]),
+                ("--gains", vec!["[N/rad", "default: kp=3860,ki=0,kd=1980"]),
+                ("--lag", vec!["[s]", "default: 0"]),
                 ("--delay", vec!["[s]", "default: 0"]),
                 ("--lqr-r", vec!["default"]),
             ],
@@ -653,9 +653,9 @@ fn every_control_subcommand_documents_its_options_with_units_and_defaults() {
             vec![
                 ("--spec", vec!["dpm", "default: dpm>=45"]),
                 ("--target", vec!["[N/rad"]),
-                ("--actuator-lag", vec!["[s]", "default: 0"]),
+                ("--lag", vec!["[s]", "default: 0"]),
                 ("--delay", vec!["[s]", "default: 0"]),
-                ("--objective", vec!["default"]),
+                ("--objective", vec!["min_gain", "default"]),
             ],
         ),
     ];

@@ -34,17 +34,20 @@ def main(base: str) -> None:
     jobs = {
         "simulate": ("/api/simulate", {"controller": controller, "phi0": tilt}),
         "margins (300 frequencies)": (
-            "/api/margins",
+            "/api/linearize",
             {"gains": gains, "frequency_points": 300},
         ),
-        "lyapunov": ("/api/lyapunov", {"controller": controller, "tilt": tilt}),
+        "exponent": ("/api/exponent", {"controller": controller, "tilt": tilt}),
         "phase (4 tilts)": (
             "/api/phase",
-            {"controller": controller, "tilts": [tilt, -tilt, 2 * tilt, -2 * tilt]},
+            {
+                "portraits": [["current gains", {"closed": controller}]],
+                "tilts": [tilt, -tilt, 2 * tilt, -2 * tilt],
+            },
         ),
         "tune": ("/api/tune", {"spec": "dpm>=45", "tilt": tilt}),
         "map row (20 points)": (
-            "/api/map",
+            "/api/sweep",
             {
                 "grid": row,
                 "metric": "max-lyapunov",

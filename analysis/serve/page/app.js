@@ -188,7 +188,7 @@ function showLyapunov(answer) {
 }
 
 function showPhase(answer) {
-  draw("c-phase", answer.series.map((run) => ({
+  draw("c-phase", answer.series[0].map((run) => ({
     label: `Φ0 = ${run.phi0.toFixed(3)}`,
     data: xy(run.phi, run.phi_dot),
   })));
@@ -212,9 +212,12 @@ async function update() {
   const body = (settings) => ({ params, settings });
   const jobs = {
     simulate: api("/api/simulate", body({ controller: c, phi0: tilt() })),
-    margins: api("/api/margins", body({ gains: g, loop_options: loopOptions(), frequency_points: 300 })),
-    lyapunov: api("/api/lyapunov", body({ controller: c, tilt: tilt() })),
-    phase: api("/api/phase", body({ controller: c, tilts: [tilt(), -tilt(), 2 * tilt(), -2 * tilt()] })),
+    margins: api("/api/linearize", body({ gains: g, loop_options: loopOptions(), frequency_points: 300 })),
+    lyapunov: api("/api/exponent", body({ controller: c, tilt: tilt() })),
+    phase: api(
+      "/api/phase",
+      body({ portraits: [["current gains", { closed: c }]], tilts: [tilt(), -tilt(), 2 * tilt(), -2 * tilt()] }),
+    ),
   };
   const names = Object.keys(jobs);
   const settled = await Promise.allSettled(Object.values(jobs));
@@ -283,9 +286,9 @@ async function computeMap() {
         metric: "max-lyapunov",
         tilt: tilt(),
         controller: c,
-        metric_settings: twv.model.defaults.lyapunov.metric_settings,
+        metric_settings: twv.model.defaults.exponent.metric_settings,
       };
-      const answer = await api("/api/map", { params, settings });
+      const answer = await api("/api/sweep", { params, settings });
       map.rows.push(answer.result);
       $("map-progress").value = (j + 1) / MAP_N;
       drawMap();
@@ -406,7 +409,7 @@ async function start() {
   $("model-name").textContent = model.model;
   $("params-origin").textContent = `parameters: ${model.params_origin}`;
   model.states.forEach((s, i) => (stateIndex[s] = i));
-  const g = model.defaults.margins.gains;
+  const g = model.defaults.linearize.gains;
   $("kp").value = g.kp;
   $("ki").value = g.ki;
   $("kd").value = g.kd;

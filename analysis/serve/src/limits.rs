@@ -1,35 +1,26 @@
-//! What one request may ask for. The library validates that settings make sense; these bound
-//! how much work they may cost, so that no request ties a worker up for more than a few
-//! seconds: a request over a limit is refused with the limit named, not started.
+//! What one request may cost. The library validates that settings make sense and computes the
+//! work they ask for (a [`Budget`], before anything runs); these bound it, so that no request
+//! ties a worker up for more than a few seconds: a request over a limit is refused with the
+//! limit named, not started.
 
 use serde::Serialize;
-use twv_analysis::api::{LinearSettings, SimSettings, SweepSettings, TuneSettings};
-use twv_analysis::control::RunSettings;
-use twv_analysis::lyapunov::IntegratorChoice;
+use twv_analysis::jobs::Budget;
 
 /// Largest request body [bytes].
 pub const MAX_BODY: usize = 256 * 1024;
 /// Largest model time of one run [s].
 pub const MAX_HORIZON: f64 = 120.0;
-/// Most integration steps of one run (an adaptive run counted at its smallest step).
-pub const MAX_STEPS: f64 = 500_000.0;
-/// Most samples one run returns.
+/// Most integration steps of one request, all runs and points together (an adaptive run
+/// counted at its smallest step, `h_min`).
+pub const MAX_STEPS: f64 = 2.5e7;
+/// Most samples one request returns.
 pub const MAX_SAMPLES: f64 = 50_000.0;
-/// Largest initial tilt [rad]: half a turn (beyond it the pendulum hangs below).
-pub const MAX_TILT: f64 = std::f64::consts::PI;
-/// Most initial tilts of a phase portrait.
-pub const MAX_TILTS: usize = 16;
-/// Most points of one map request (the page asks row by row).
-pub const MAX_MAP_POINTS: usize = 2_500;
-/// Most integration steps of one map request, all points together.
-pub const MAX_MAP_STEPS: f64 = 2.5e7;
-/// Most points of a frequency response.
-pub const MAX_FREQUENCY_POINTS: usize = 5_000;
-/// Most requirements of a tuning spec.
-pub const MAX_REQUIREMENTS: usize = 16;
-/// Most iterations and grid points per decade of a tuning.
-pub const MAX_TUNE_ITERATIONS: usize = 500;
-pub const MAX_TUNE_POINTS_PER_DECADE: usize = 2_000;
+/// Most points of one map request (the page asks row by row), runs of a portrait or speeds.
+pub const MAX_POINTS: f64 = 2_500.0;
+/// Most points of a frequency response, or grid points per decade of a tuning.
+pub const MAX_FREQUENCY_POINTS: f64 = 5_000.0;
+/// Most subproblems of a tuning (or requirements of its spec).
+pub const MAX_ITERATIONS: f64 = 200.0;
 
 /// The limits, for `GET /api/model` (the page and scripts read them).
 #[derive(Debug, Clone, Copy, Serialize)]
@@ -38,12 +29,9 @@ pub struct Limits {
     pub max_horizon: f64,
     pub max_steps: f64,
     pub max_samples: f64,
-    pub max_tilt: f64,
-    pub max_tilts: usize,
-    pub max_map_points: usize,
-    pub max_map_steps: f64,
-    pub max_requirements: usize,
-    pub max_frequency_points: usize,
+    pub max_points: f64,
+    pub max_frequency_points: f64,
+    pub max_iterations: f64,
 }
 
 /// The limits in force.
@@ -52,130 +40,44 @@ pub const LIMITS: Limits = Limits {
     max_horizon: MAX_HORIZON,
     max_steps: MAX_STEPS,
     max_samples: MAX_SAMPLES,
-    max_tilt: MAX_TILT,
-    max_tilts: MAX_TILTS,
-    max_map_points: MAX_MAP_POINTS,
-    max_map_steps: MAX_MAP_STEPS,
-    max_requirements: MAX_REQUIREMENTS,
+    max_points: MAX_POINTS,
     max_frequency_points: MAX_FREQUENCY_POINTS,
+    max_iterations: MAX_ITERATIONS,
 };
 
-/// A request over a limit: the field, what it asks, the limit.
-pub type Refusal = String;
-
-fn over(field: &str, asked: f64, limit: f64) -> Refusal {
-    format!("{field}: {asked} is over this server's limit of {limit}")
-}
-
-/// `asked` ≤ `limit`, or the refusal naming `field`.
-fn at_most(field: &str, asked: f64, limit: f64) -> Result<(), Refusal> {
-    if asked > limit {
-        return Err(over(field, asked, limit));
+/// `budget` within the limits, or the refusal naming what is over.
+pub fn check(budget: &Budget) -> Result<(), String> {
+    let checks = [
+        ("horizon [s]", budget.horizon, MAX_HORIZON, "a shorter t_end"),
+        (
+            "integration steps",
+            budget.steps,
+            MAX_STEPS,
+            "a larger step h (for dopri: h_min > 0 bounds its steps), a shorter run or fewer points",
+        ),
+        ("samples", budget.samples, MAX_SAMPLES, "a larger sample interval"),
+        ("points", budget.points, MAX_POINTS, "fewer points per request"),
+        (
+            "frequency points",
+            budget.frequency_points,
+            MAX_FREQUENCY_POINTS,
+            "fewer frequency points",
+        ),
+        ("iterations", budget.iterations, MAX_ITERATIONS, "fewer iterations"),
+    ];
+    for (what, asked, limit, hint) in checks {
+        // NaN (an invalid setting the library names) never reaches here: settings are validated
+        // before their budget is computed; an infinite ask is over any limit.
+        if asked.is_nan() || asked > limit {
+            let shown = if asked.is_finite() {
+                format!("{asked:.0}")
+            } else {
+                "unbounded".to_string()
+            };
+            return Err(format!(
+                "settings: {shown} {what} is over this server's limit of {limit} (ask for {hint})"
+            ));
+        }
     }
-    Ok(())
-}
-
-/// Steps to integrate `span` seconds with `integrator` (an adaptive one at its smallest step).
-fn steps(span: f64, integrator: &IntegratorChoice) -> f64 {
-    let h = match integrator {
-        IntegratorChoice::Rk4 { h } => *h,
-        IntegratorChoice::Dopri(o) => o.h_min,
-    };
-    span / h
-}
-
-fn check_steps(field: &str, span: f64, integrator: &IntegratorChoice) -> Result<(), Refusal> {
-    at_most(field, span, MAX_HORIZON)?;
-    let n = steps(span, integrator);
-    // NaN or a zero step: let the library name it (validated after these bounds).
-    if n.is_finite() && n > MAX_STEPS {
-        return Err(format!(
-            "{field}: {span} s at that step is {n:.0} steps, over this server's limit of \
-             {MAX_STEPS}"
-        ));
-    }
-    Ok(())
-}
-
-/// A run's horizon, steps and samples.
-pub fn run(field: &str, r: &RunSettings) -> Result<(), Refusal> {
-    check_steps(&format!("{field}.t_end"), r.t_end, &r.integrator)?;
-    at_most(
-        &format!("{field}.sample (samples)"),
-        r.t_end / r.sample,
-        MAX_SAMPLES,
-    )
-}
-
-/// An initial tilt (a NaN is left to the library to name).
-pub fn tilt(field: &str, value: f64) -> Result<(), Refusal> {
-    at_most(&format!("{field} (its size)"), value.abs(), MAX_TILT)
-}
-
-/// A simulation.
-pub fn simulate(s: &SimSettings) -> Result<(), Refusal> {
-    tilt("settings.phi0", s.phi0)?;
-    run("settings.run", &s.run)
-}
-
-/// A phase portrait: its runs and the number of tilts.
-pub fn phase(run_settings: &RunSettings, tilts: &[f64]) -> Result<(), Refusal> {
-    at_most("settings.tilts", tilts.len() as f64, MAX_TILTS as f64)?;
-    for t in tilts {
-        tilt("settings.tilts", *t)?;
-    }
-    run("settings.run", run_settings)
-}
-
-/// A map: its points, and the steps of all of them.
-pub fn map(s: &SweepSettings, points: usize) -> Result<(), Refusal> {
-    tilt("settings.tilt", s.tilt)?;
-    at_most(
-        "settings.grid (points)",
-        points as f64,
-        MAX_MAP_POINTS as f64,
-    )?;
-    let m = &s.metric_settings;
-    let span = (m.transient + m.t_sample * m.iterations as f64).max(m.t_end);
-    let per_point = span / m.h;
-    at_most("settings.metric_settings (horizon)", span, MAX_HORIZON)?;
-    let total = per_point * points as f64;
-    if total.is_finite() && total > MAX_MAP_STEPS {
-        return Err(format!(
-            "settings: {points} points × {per_point:.0} steps is over this server's limit of \
-             {MAX_MAP_STEPS} steps per request (ask for fewer points at a time)"
-        ));
-    }
-    Ok(())
-}
-
-/// A linear analysis: the points of its frequency response.
-pub fn margins(s: &LinearSettings) -> Result<(), Refusal> {
-    at_most(
-        "settings.frequency_points",
-        s.frequency_points as f64,
-        MAX_FREQUENCY_POINTS as f64,
-    )
-}
-
-/// A tuning.
-pub fn tune(s: &TuneSettings) -> Result<(), Refusal> {
-    let n = s.spec.requirements.len();
-    at_most(
-        "settings.spec (requirements)",
-        n as f64,
-        MAX_REQUIREMENTS as f64,
-    )?;
-    let o = &s.options;
-    at_most(
-        "settings.options.max_iterations",
-        o.max_iterations as f64,
-        MAX_TUNE_ITERATIONS as f64,
-    )?;
-    at_most(
-        "settings.options.points_per_decade",
-        o.points_per_decade as f64,
-        MAX_TUNE_POINTS_PER_DECADE as f64,
-    )?;
     Ok(())
 }

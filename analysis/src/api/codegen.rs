@@ -6,7 +6,8 @@ use crate::error::Result;
 use crate::model::ResolvedModel;
 
 /// How to emit. Defaults: the model's name in CamelCase, parameters at run time.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct CodegenSettings {
     /// Name of the emitted struct; `None`: the model name in CamelCase.
     pub name: Option<String>,

@@ -7,7 +7,8 @@ use crate::error::{Error, Result};
 use crate::model::{check_vector, dispatch, ModelTask, ResolvedModel};
 
 /// What to evaluate. Defaults: u = 0, no Jacobians.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct EvalSettings {
     /// The state, in the model's state order (SI units, rad).
     pub x: Vec<f64>,

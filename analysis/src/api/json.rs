@@ -1,75 +1,35 @@
 //! Every job with its settings and its result as JSON: the entry point of front ends that speak
-//! JSON (the Python package, the live page). The settings are the job's settings type read by
-//! serde — unknown fields are refused, absent ones take the defaults beside each field — and the
-//! result is the same serialisation the CLI prints with `--json`, so the two agree bit for bit.
+//! JSON (the Python package, the live page), one loop over the [job registry](crate::jobs). The
+//! settings are the job's settings type read by serde — unknown fields are refused, absent ones
+//! take the defaults beside each field — optionally with the job's flat options laid over them
+//! (what a Python call's keywords are), and the result is the same serialisation the CLI prints
+//! with `--json`, so the two agree bit for bit.
 
 use std::ops::Range;
 
-use serde::de::DeserializeOwned;
-use serde::Serialize;
+use serde_json::Value;
 
-use super::{
-    analyse, audit_model, compute_points, ride, simulate, spectrum, steady_motion, tune_model,
-    HandAuditJob, LinearSettings, RideSettings, SimSettings, SpectrumSettings, SteadySettings,
-    SweepSettings, TuneSettings,
-};
-use crate::audit::AuditSettings;
+use super::{compute_points, SweepSettings};
 use crate::error::{Error, Result};
+use crate::jobs;
 use crate::model::ResolvedModel;
 use crate::progress::Progress;
 
-/// The jobs [`run`] knows, by name.
-pub const JOBS: [&str; 9] = [
-    "spectrum",
-    "simulate",
-    "ride",
-    "linear",
-    "tune",
-    "sweep",
-    "audit",
-    "audit_hand",
-    "steady",
-];
+pub use crate::jobs::to_text;
 
-/// Reads the settings of `job` from a JSON object (the error names the job and the field).
-pub fn settings<T: DeserializeOwned>(job: &str, text: &str) -> Result<T> {
-    serde_json::from_str(text).map_err(|e| Error::input("settings", format!("{job}: {e}")))
+/// The names of the jobs [`run`] knows (aliases are accepted too).
+pub fn jobs() -> Vec<&'static str> {
+    jobs::registry().iter().map(|j| j.name()).collect()
 }
 
-/// A result or settings value as pretty JSON, the way [`run`] returns it.
-pub fn to_text<T: Serialize>(value: &T) -> Result<String> {
-    serde_json::to_string_pretty(value)
-        .map_err(|e| Error::input("result", format!("cannot be written as JSON: {e}")))
+/// Reads a JSON text (the error names `what`).
+pub fn parse(what: &str, text: &str) -> Result<Value> {
+    serde_json::from_str(text).map_err(|e| Error::input(what, format!("not JSON: {e}")))
 }
 
-fn unknown(job: &str) -> Error {
-    Error::input(
-        "job",
-        format!("unknown job `{job}`; known: {}", JOBS.join(", ")),
-    )
-}
-
-/// The default settings of `job` as JSON (a sweep has no default grid: its settings need
-/// `grid` and `metric`).
+/// The default settings of `job` as pretty JSON.
 pub fn default_settings(job: &str) -> Result<String> {
-    match job {
-        "spectrum" => to_text(&SpectrumSettings::default()),
-        "simulate" => to_text(&SimSettings::default()),
-        "ride" => to_text(&RideSettings::default()),
-        "linear" => to_text(&LinearSettings::default()),
-        "tune" => to_text(&TuneSettings::default()),
-        "audit" => to_text(&AuditSettings::default()),
-        "steady" => to_text(&SteadySettings::default()),
-        "sweep" => Err(Error::input(
-            "settings",
-            "sweep: no default; give at least `grid` and `metric`",
-        )),
-        "audit_hand" => Err(Error::input(
-            "settings",
-            "audit_hand: no default; give at least `hand` (the hand file's text)",
-        )),
-        _ => Err(unknown(job)),
-    }
+    to_text(&jobs::find(job)?.default_settings())
 }
 
 /// A job's result as JSON, and the time series the CLI writes beside it as CSV (the running
@@ -80,59 +40,75 @@ pub struct Output {
     pub result: String,
     /// The series (`running.csv`, `sim.csv`), if the job has one.
     pub csv: Option<String>,
+    /// The few readable lines `twv <job>` prints.
+    pub summary: String,
+    /// The one-line verdict of a negative result (the CLI's exit status 3), if negative.
+    pub negative: Option<String>,
 }
 
-/// Runs `job` on `model` with `settings` (a JSON object). A sweep returns its points in index
-/// order.
+/// The flat options of a JSON object `{name: value}`, in its order.
+pub fn options_of(text: &str) -> Result<Vec<(String, Value)>> {
+    match parse("options", text)? {
+        Value::Object(map) => Ok(map.into_iter().collect()),
+        Value::Null => Ok(Vec::new()),
+        _ => Err(Error::input(
+            "options",
+            "must be a JSON object {name: value}",
+        )),
+    }
+}
+
+fn finish(out: Box<dyn jobs::Finished>) -> Result<Output> {
+    Ok(Output {
+        result: out.json()?,
+        csv: out.csv(),
+        summary: out.summary(),
+        negative: match out.verdict() {
+            jobs::Verdict::Done => None,
+            jobs::Verdict::Negative(why) => Some(why),
+        },
+    })
+}
+
+/// Runs `job` on `model` with `settings` (a JSON object).
 pub fn run(
     job: &str,
     model: &ResolvedModel,
     settings_json: &str,
     progress: &dyn Progress,
 ) -> Result<Output> {
-    let plain = |result: String| Output { result, csv: None };
-    match job {
-        "spectrum" => {
-            let r = spectrum(model, &settings(job, settings_json)?, progress)?;
-            Ok(Output {
-                result: to_text(&r)?,
-                csv: Some(r.running_csv()),
-            })
-        }
-        "simulate" => {
-            let r = simulate(model, &settings(job, settings_json)?, progress)?;
-            Ok(Output {
-                result: to_text(&r)?,
-                csv: Some(r.csv()),
-            })
-        }
-        "ride" => {
-            let r = ride(model, &settings(job, settings_json)?, progress)?;
-            Ok(Output {
-                result: to_text(&r)?,
-                csv: Some(r.csv()),
-            })
-        }
-        "linear" => to_text(&analyse(model, &settings(job, settings_json)?)?).map(plain),
-        "tune" => to_text(&tune_model(model, &settings(job, settings_json)?)?).map(plain),
-        "audit" => to_text(&audit_model(model, &settings(job, settings_json)?)?).map(plain),
-        "audit_hand" => {
-            let job: HandAuditJob = settings(job, settings_json)?;
-            to_text(&job.run(model)?).map(plain)
-        }
-        "steady" => {
-            let r = steady_motion(model, &settings(job, settings_json)?)?;
-            Ok(Output {
-                result: to_text(&r)?,
-                csv: Some(r.csv()),
-            })
-        }
-        "sweep" => {
-            let s: SweepSettings = settings(job, settings_json)?;
-            to_text(&super::sweep(model, &s, progress)?).map(plain)
-        }
-        _ => Err(unknown(job)),
-    }
+    let job = jobs::find(job)?;
+    let prepared = job.prepare_json(&parse("settings", settings_json)?)?;
+    finish(prepared.run(model, progress)?)
+}
+
+/// Runs `job` on `model` with its flat options (a JSON object `{name: value}`, what the command
+/// line's flags and Python's keywords are) laid over `settings_json` (or the defaults).
+pub fn run_options(
+    job: &str,
+    model: &ResolvedModel,
+    settings_json: Option<&str>,
+    options_json: &str,
+    progress: &dyn Progress,
+) -> Result<Output> {
+    let job = jobs::find(job)?;
+    let base = settings_json.map(|t| parse("settings", t)).transpose()?;
+    let prepared = job.prepare_options(base.as_ref(), &options_of(options_json)?)?;
+    finish(prepared.run(model, progress)?)
+}
+
+/// The settings `job` would run with these options (pretty JSON), validated but not run.
+pub fn resolve_options(
+    job: &str,
+    settings_json: Option<&str>,
+    options_json: &str,
+) -> Result<String> {
+    let job = jobs::find(job)?;
+    let base = settings_json.map(|t| parse("settings", t)).transpose()?;
+    to_text(
+        &job.prepare_options(base.as_ref(), &options_of(options_json)?)?
+            .settings(),
+    )
 }
 
 /// The points `range` of a sweep (a shard another process computes: the Python package hands
@@ -143,7 +119,7 @@ pub fn sweep_range(
     range: Range<usize>,
     progress: &dyn Progress,
 ) -> Result<String> {
-    let s: SweepSettings = settings("sweep", settings_json)?;
+    let s: SweepSettings = sweep_settings(settings_json)?;
     let config = s.config(model)?;
     let total = config.grid.len();
     if range.start > range.end || range.end > total {
@@ -162,8 +138,13 @@ pub fn sweep_range(
     to_text(&computed.points)
 }
 
+fn sweep_settings(text: &str) -> Result<SweepSettings> {
+    let prepared = jobs::find("sweep")?.prepare_json(&parse("settings", text)?)?;
+    serde_json::from_value(prepared.settings())
+        .map_err(|e| Error::input("settings", format!("sweep: {e}")))
+}
+
 /// The number of points of a sweep's grid (validated).
 pub fn sweep_len(model: &ResolvedModel, settings_json: &str) -> Result<usize> {
-    let s: SweepSettings = settings("sweep", settings_json)?;
-    Ok(s.config(model)?.grid.len())
+    Ok(sweep_settings(settings_json)?.config(model)?.grid.len())
 }

@@ -54,6 +54,10 @@ pub struct LinearSettings {
     pub frequency_points: usize,
 }
 
+/// Points of the frequency response when its figures are written (`twv linearize --out`) and
+/// none were asked for.
+pub const FIGURE_FREQUENCY_POINTS: usize = 400;
+
 /// The most frequency-response points one analysis returns.
 pub const MAX_FREQUENCY_POINTS: usize = 100_000;
 
@@ -254,6 +258,16 @@ pub struct LinearReport {
     pub lqr: Option<Lqr>,
     /// Why there is no LQR design, if there is none.
     pub lqr_note: Option<String>,
+    /// The state names, in order (the rows of A and B).
+    pub states: Vec<String>,
+    /// The input names, in order (the columns of B).
+    pub inputs: Vec<String>,
+    /// ∂f/∂x at the operating point, one list per row.
+    #[serde(serialize_with = "crate::linear::rows")]
+    pub a: DMatrix<f64>,
+    /// ∂f/∂u at the operating point, one list per row (the model's own inputs).
+    #[serde(serialize_with = "crate::linear::rows")]
+    pub b: DMatrix<f64>,
 }
 
 /// The largest max |f(x0)| that counts as an equilibrium: 1e-9 relative to the size of the
@@ -291,7 +305,8 @@ impl ModelTask for Linear<'_> {
             At::State(x) => OperatingPoint::State(state_vector("at", x, info.states)?),
         };
         let lin = linearize(model, &at, &[0.0; NU])?;
-        let (a, _) = lin.dynamic();
+        let (a, b_full) = lin.dynamic();
+        let b = b_full.columns(0, info.inputs.len()).into_owned();
         let equilibrium = lin.residual <= equilibrium_tolerance(&a, &lin.x0);
         if !equilibrium && !s.allow_non_equilibrium {
             return Err(Error::input(
@@ -344,6 +359,10 @@ impl ModelTask for Linear<'_> {
             lqr_states: LQR_STATES.iter().map(|s| s.to_string()).collect(),
             lqr,
             lqr_note,
+            states: info.states.iter().map(|s| s.to_string()).collect(),
+            inputs: info.inputs.iter().map(|s| s.to_string()).collect(),
+            a,
+            b,
         })
     }
 }

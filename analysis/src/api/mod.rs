@@ -40,19 +40,20 @@ pub use codegen::{camel, generate, CodegenSettings};
 pub use eval::{evaluate, evaluate_batch, Batch, EvalResult, EvalSettings, Quantity};
 pub use linear::{
     analyse, complex, equilibrium_tolerance, pitch_loop, At, LinearReport, LinearSettings,
-    LoopVerdict, PhaseMargin, PitchReport, StableMargins, LQR_STATES, MAX_FREQUENCY_POINTS,
+    LoopVerdict, PhaseMargin, PitchReport, StableMargins, FIGURE_FREQUENCY_POINTS, LQR_STATES,
+    MAX_FREQUENCY_POINTS,
 };
 pub use loop_figures::{bode, nyquist, NYQUIST_CLIP};
 pub use phase::{portraits, Drive, PhaseResult, PhaseRun, PhaseSettings, Portrait, DEFAULT_TILTS};
 pub use ride::{ride, ride_verdict, RideResult, RideSettings, RideVerdict, RIDE_DECAY, RIDE_TAIL};
 pub use simulate::{
-    recovery_of, simulate, InputDirections, Recovery, SimResult, SimSettings, MANEUVER_V_LOOP,
-    RECOVERED_PHI,
+    recovery_of, simulate, InputDirections, Maneuver, Recovery, SimResult, SimSettings,
+    MANEUVER_V_LOOP, RECOVERED_PHI,
 };
 pub use spectrum::{drift_states, spectrum, SpectrumResult, SpectrumSettings, Timing};
 pub use steady::{
-    steady_motion, steady_state, SpeedPoint, SteadyResult, SteadySettings, SteadyVerdict,
-    MAX_SPEEDS,
+    steady_motion, steady_state, Crossing, SpeedPoint, StableRange, SteadyResult, SteadySettings,
+    SteadyVerdict, MAX_SPEEDS,
 };
 pub use sweep::{
     compute_points, run_shard, status_counts, sweep, Computed, ShardOptions, ShardOutcome,

@@ -16,7 +16,8 @@ use crate::plot::{Curve, Figure, Grid, LineChart};
 use crate::progress::Progress;
 
 /// What drives one portrait.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Drive {
     /// The PID controller.
     Closed(ControllerSettings),
@@ -25,12 +26,15 @@ pub enum Drive {
 }
 
 /// The portraits to draw.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct PhaseSettings {
     /// (label, drive) per portrait. Default the study's four gain sets.
     pub portraits: Vec<(String, Drive)>,
-    /// Initial model states; `None`: at rest with Φ = 0.1, −0.1, 0.2, −0.2 rad.
+    /// Initial model states; `None`: at rest with Φ = each of `tilts`.
     pub x0: Option<Vec<Vec<f64>>>,
+    /// Initial pitch angles from rest when `x0` is `None` [rad]. Default 0.1, −0.1, 0.2, −0.2.
+    pub tilts: Vec<f64>,
     /// Length, sampling and integrator of each run. Default 10 s.
     pub run: RunSettings,
 }
@@ -48,6 +52,7 @@ impl Default for PhaseSettings {
                 })
                 .collect(),
             x0: None,
+            tilts: DEFAULT_TILTS.to_vec(),
             run: RunSettings::default(),
         }
     }
@@ -214,7 +219,9 @@ pub fn portraits(
     let starts: Vec<Vec<f64>> = match &settings.x0 {
         Some(x) if x.is_empty() => return Err(Error::input("x0", "no initial states")),
         Some(x) => x.clone(),
-        None => DEFAULT_TILTS
+        None if settings.tilts.is_empty() => return Err(Error::input("tilts", "no initial tilts")),
+        None => settings
+            .tilts
             .iter()
             .map(|&p| model.rest_with("phi", p))
             .collect::<Result<_>>()?,

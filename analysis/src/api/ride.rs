@@ -121,6 +121,8 @@ pub struct RideResult {
     /// CSV column names: t, then the states.
     #[serde(skip)]
     pub columns: Vec<String>,
+    /// Each column's unit, in the order of the CSV's columns (SI).
+    pub units: Vec<String>,
     /// CSV rows.
     #[serde(skip)]
     pub rows: Vec<Vec<f64>>,
@@ -217,6 +219,7 @@ impl ModelTask for Ride<'_> {
             tail_peak,
             final_value: watched.last().map_or(0.0, |v| v.abs()),
             verdict,
+            units: resolved.column_units(&columns, &[]),
             columns,
             rows,
         })

@@ -8,7 +8,7 @@ use crate::control::{
     run_closed_loop, ClosedLoopRun, ControllerSettings, LoopMetrics, PidLoop, Plant, Profile,
     RunEnd, RunSettings, VelocityLoop,
 };
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::model::{dispatch_control, state_vector, ControlTask, ResolvedModel};
 use crate::output::Files;
 use crate::plot::{Curve, Figure, LineChart};
@@ -23,16 +23,59 @@ pub const MANEUVER_V_LOOP: (f64, f64) = (0.08, 0.03);
 /// its 2 % band from the settling time on): 0.002 rad = 0.11°.
 pub const RECOVERED_PHI: f64 = 0.002;
 
+/// The maneuver of `twv simulate --scenario maneuver`: from rest, accelerate to `v_cruise` over
+/// `ramp`, cruise for `cruise`, decelerate over `ramp`, stop, through the velocity loop.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Maneuver {
+    /// Cruise speed [m/s]. Default 2.
+    pub v_cruise: f64,
+    /// Acceleration and deceleration time [s]. Default 3.
+    pub ramp: f64,
+    /// Cruise time [s]. Default 5.
+    pub cruise: f64,
+}
+
+impl Default for Maneuver {
+    fn default() -> Self {
+        Self {
+            v_cruise: 2.0,
+            ramp: 3.0,
+            cruise: 5.0,
+        }
+    }
+}
+
+impl Maneuver {
+    /// The velocity reference.
+    pub fn profile(&self) -> Result<Profile> {
+        Ok(crate::control::scenario::maneuver(
+            self.v_cruise,
+            self.ramp,
+            self.cruise,
+        )?)
+    }
+
+    /// The run's default length: the maneuver and 10 s more [s].
+    pub fn default_t_end(&self) -> Result<f64> {
+        Ok(self.profile()?.t_last() + 10.0)
+    }
+}
+
 /// A closed-loop run to simulate.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SimSettings {
-    /// A title for tables and figures.
+    /// A title for tables and figures; empty (default): from the scenario and the gains.
     pub title: String,
-    /// What the run is (`tilt`, `maneuver`, `forward tilt`, …).
+    /// What the run is (`tilt`, `maneuver`, `forward tilt`, …). Default `tilt`.
     pub scenario: String,
     /// The controller. Default the study's PD.
     pub controller: ControllerSettings,
+    /// The start/accelerate/cruise/decelerate/stop maneuver through the velocity loop (its
+    /// gains, or [`MANEUVER_V_LOOP`] without one); `None` (default): no maneuver.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub maneuver: Option<Maneuver>,
     /// Length, sampling, integrator, fall angle. Default 10 s, RK4 at 1 ms.
     pub run: RunSettings,
     /// Initial model state; `None`: at rest with Φ = `phi0`.
@@ -44,9 +87,10 @@ pub struct SimSettings {
 impl Default for SimSettings {
     fn default() -> Self {
         Self {
-            title: "tilt".into(),
+            title: String::new(),
             scenario: "tilt".into(),
             controller: ControllerSettings::default(),
+            maneuver: None,
             run: RunSettings::default(),
             x0: None,
             phi0: 0.1,
@@ -59,49 +103,64 @@ impl SimSettings {
     pub fn validate(&self) -> Result<()> {
         self.controller.validate()?;
         self.run.validate()?;
-        if !self.phi0.is_finite() {
-            return Err(Error::input(
-                "phi0",
-                format!("{} must be finite", self.phi0),
-            ));
+        crate::control::check_tilt("phi0", self.phi0)?;
+        if let Some(m) = &self.maneuver {
+            m.profile()?;
         }
         Ok(())
     }
 
-    /// The maneuver of `twv sim --scenario maneuver`: from rest, accelerate to `v_cruise` over
-    /// `ramp`, cruise for `cruise`, decelerate, stop, through the velocity loop of `base` (its
-    /// gains and lean limit, or [`MANEUVER_V_LOOP`] without one). The run lasts `t_end`, or the
-    /// maneuver and 10 s more.
+    /// The maneuver of `twv simulate --scenario maneuver` (see [`Maneuver`]) under the
+    /// controller `base`. The run lasts `t_end`, or the maneuver and 10 s more.
     pub fn maneuver(
         base: ControllerSettings,
         (v_cruise, ramp, cruise): (f64, f64, f64),
         run: RunSettings,
         t_end: Option<f64>,
     ) -> Result<Self> {
-        let profile = crate::control::scenario::maneuver(v_cruise, ramp, cruise)?;
-        let t_end = t_end.unwrap_or(profile.t_last() + 10.0);
-        let mut controller = base;
-        let (kp, ki, lean_max) = controller
-            .velocity
-            .as_ref()
-            .map_or((MANEUVER_V_LOOP.0, MANEUVER_V_LOOP.1, None), |v| {
-                (v.kp, v.ki, v.lean_max)
-            });
-        controller.velocity = Some(VelocityLoop {
-            kp,
-            ki,
-            reference: profile,
-            lean_max,
-        });
-        let g = controller.pitch.gains;
+        let maneuver = Maneuver {
+            v_cruise,
+            ramp,
+            cruise,
+        };
+        let t_end = match t_end {
+            Some(t) => t,
+            None => maneuver.default_t_end()?,
+        };
         Ok(Self {
-            title: format!("maneuver, Kp {} Ki {} Kd {}", g.kp, g.ki, g.kd),
             scenario: "maneuver".into(),
-            controller,
+            controller: base,
+            maneuver: Some(maneuver),
             run: RunSettings { t_end, ..run },
-            x0: None,
             phi0: 0.0,
+            ..Self::default()
         })
+    }
+
+    /// The settings as they run: the maneuver's velocity reference in the controller, the
+    /// title filled in.
+    pub fn resolved(&self) -> Result<Self> {
+        let mut s = self.clone();
+        if let Some(m) = &self.maneuver {
+            let (kp, ki, lean_max) = s
+                .controller
+                .velocity
+                .as_ref()
+                .map_or((MANEUVER_V_LOOP.0, MANEUVER_V_LOOP.1, None), |v| {
+                    (v.kp, v.ki, v.lean_max)
+                });
+            s.controller.velocity = Some(VelocityLoop {
+                kp,
+                ki,
+                reference: m.profile()?,
+                lean_max,
+            });
+        }
+        if s.title.is_empty() {
+            let g = s.controller.pitch.gains;
+            s.title = format!("{}, Kp {} Ki {} Kd {}", s.scenario, g.kp, g.ki, g.kd);
+        }
+        Ok(s)
     }
 }
 
@@ -154,6 +213,8 @@ pub struct SimResult {
     /// CSV column names.
     #[serde(skip)]
     pub columns: Vec<String>,
+    /// Each column's unit, in the order of the CSV's columns (SI).
+    pub units: Vec<String>,
     /// CSV rows.
     #[serde(skip)]
     pub rows: Vec<Vec<f64>>,
@@ -192,6 +253,15 @@ impl ControlTask for Sim<'_> {
         let field = PidLoop::<_, NX, NU, NA>::new(model, &s.controller, plant)?;
         let run = run_closed_loop(&field, &x0, &s.run, self.1)?;
         let (columns, rows) = table(&field, &run);
+        let mut extra: Vec<(&str, &str)> = vec![
+            ("phi_ref", "rad"),
+            ("F_cmd", "N"),
+            ("F", "N"),
+            ("T", "N m"),
+            ("v_ref", "m/s"),
+        ];
+        extra.extend(field.layout().states().iter().map(|(_, n, u)| (*n, *u)));
+        let units = resolved.column_units(&columns, &extra);
         let nu = info.inputs.len();
         let rest = s.controller.pitch.setpoint.rest_value();
         Ok(SimResult {
@@ -210,6 +280,7 @@ impl ControlTask for Sim<'_> {
             recovery: recovery_of(&run.trajectory.end, &run.metrics, rest),
             metrics: run.metrics,
             columns,
+            units,
             rows,
         })
     }
@@ -264,6 +335,7 @@ pub fn simulate(
     progress: &dyn Progress,
 ) -> Result<SimResult> {
     settings.validate()?;
+    let settings = &settings.resolved()?;
     dispatch_control(
         model,
         settings.controller.n_states(),

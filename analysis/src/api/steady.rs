@@ -111,7 +111,61 @@ pub struct SteadyResult {
     /// Speed intervals where every studied eigenvalue has a negative real part; a bound at
     /// the grid's edge is the edge (the range may go on).
     pub stable_ranges: Vec<(f64, f64)>,
+    /// Each stable range with the kind of mode that crosses zero at each bound.
+    pub ranges: Vec<StableRange>,
+    /// The lowest speed where an oscillating pair becomes stable (a bicycle's weave speed):
+    /// the lower bound of the first stable range when a complex pair crosses there [m/s].
+    pub weave_speed: Option<f64>,
+    /// The speed where a real mode becomes unstable above a stable range (a bicycle's capsize
+    /// speed): the upper bound of the first stable range when a real eigenvalue crosses there
+    /// [m/s].
+    pub capsize_speed: Option<f64>,
     pub verdict: SteadyVerdict,
+}
+
+/// What crosses the imaginary axis at a bound of a stable range.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Crossing {
+    /// A complex pair (an oscillation: a bicycle's weave).
+    Oscillatory,
+    /// A real eigenvalue (a divergence: a bicycle's capsize).
+    Real,
+    /// The bound is the grid's edge: nothing crosses there on the grid.
+    GridEdge,
+}
+
+/// A stable speed range with what bounds it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StableRange {
+    /// Lowest stable speed [m/s].
+    pub lo: f64,
+    /// Highest stable speed [m/s].
+    pub hi: f64,
+    /// What crosses at `lo`.
+    pub lo_crossing: Crossing,
+    /// What crosses at `hi`.
+    pub hi_crossing: Crossing,
+}
+
+/// An eigenvalue's imaginary part counts as zero below this, relative to its modulus.
+const REAL_TOLERANCE: f64 = 1e-9;
+
+/// What crosses at `speed`: the eigenvalue with the largest real part there.
+fn crossing_kind(motion: &Motion, speed: f64, work: &mut Vec<f64>) -> Result<Crossing> {
+    let ev = motion.eigenvalues(speed, work)?;
+    let top = ev
+        .iter()
+        .copied()
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .unwrap_or((0.0, 0.0));
+    Ok(
+        if top.1.abs() > REAL_TOLERANCE * top.0.hypot(top.1).max(1.0) {
+            Crossing::Oscillatory
+        } else {
+            Crossing::Real
+        },
+    )
 }
 
 /// The model's description of its steady motion, read from the IR.
@@ -312,7 +366,38 @@ pub fn steady_motion(model: &ResolvedModel, settings: &SteadySettings) -> Result
     if let (Some(lo), Some(last)) = (start, points.last()) {
         stable_ranges.push((lo, last.speed));
     }
+    let (first, last) = (
+        points.first().map_or(f64::NAN, |p| p.speed),
+        points.last().map_or(f64::NAN, |p| p.speed),
+    );
+    let mut ranges = Vec::new();
+    for &(lo, hi) in &stable_ranges {
+        let kind = |v: f64, edge: f64, work: &mut Vec<f64>| {
+            if v == edge {
+                Ok(Crossing::GridEdge)
+            } else {
+                crossing_kind(&motion, v, work)
+            }
+        };
+        ranges.push(StableRange {
+            lo,
+            hi,
+            lo_crossing: kind(lo, first, &mut work)?,
+            hi_crossing: kind(hi, last, &mut work)?,
+        });
+    }
+    let weave_speed = ranges
+        .first()
+        .filter(|r| r.lo_crossing == Crossing::Oscillatory)
+        .map(|r| r.lo);
+    let capsize_speed = ranges
+        .first()
+        .filter(|r| r.hi_crossing == Crossing::Real)
+        .map(|r| r.hi);
     Ok(SteadyResult {
+        ranges,
+        weave_speed,
+        capsize_speed,
         model: model.name().to_string(),
         modes: motion.mode_names.clone(),
         speed_state: motion.speed_state.clone(),

@@ -21,7 +21,7 @@ use crate::model::{
 use crate::output::write_atomic;
 use crate::progress::Progress;
 use crate::sweep::{
-    max_lyapunov_lanes, metric, Grid, Metric, MetricSettings, PointResult, Shard, ShardFile,
+    max_lyapunov_lanes, metric, Axis, Grid, Metric, MetricSettings, PointResult, Shard, ShardFile,
     Status, SweepConfig, SweepError, TILT_AXIS,
 };
 
@@ -29,32 +29,51 @@ use crate::sweep::{
 /// ~150 bytes per point): refused before anything is allocated.
 pub const MAX_POINTS: usize = 10_000_000;
 
-/// What to map. Defaults: the study's sampling after a tilt of 0.1 rad, the study's
+/// What to map. Defaults: a 100 × 100 map of the largest Lyapunov exponent over Kp 0…8000 N/rad
+/// and Kd 0…4000 N s/rad, with the study's sampling after a tilt of 0.1 rad and the study's
 /// controller apart from the swept gains.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct SweepSettings {
-    /// The (Kp, Kd[, Ki]) grid.
+    /// The (Kp, Kd[, Ki]) grid and the parameter axes.
     pub grid: Grid,
     /// What to map.
     pub metric: Metric,
     /// Initial model state of the nonlinear metrics; `None`: at rest with Φ = `tilt`.
-    #[serde(default)]
     pub x0: Option<Vec<f64>>,
     /// Initial tilt of the nonlinear metrics [rad]. Default 0.1.
-    #[serde(default = "default_tilt")]
     pub tilt: f64,
     /// The controller apart from the gains (setpoint, saturation, outer loops).
-    #[serde(default)]
     pub controller: ControllerSettings,
     /// The metrics' numerical settings.
-    #[serde(default)]
     pub metric_settings: MetricSettings,
 }
 
 /// The default initial tilt of the nonlinear metrics [rad].
 fn default_tilt() -> f64 {
     0.1
+}
+
+impl Default for SweepSettings {
+    fn default() -> Self {
+        Self::new(
+            Grid {
+                kp: Axis {
+                    lo: 0.0,
+                    hi: 8000.0,
+                    n: 100,
+                },
+                kd: Axis {
+                    lo: 0.0,
+                    hi: 4000.0,
+                    n: 100,
+                },
+                ki: None,
+                params: Vec::new(),
+            },
+            Metric::MaxLyapunov,
+        )
+    }
 }
 
 impl SweepSettings {

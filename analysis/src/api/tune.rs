@@ -113,6 +113,7 @@ pub fn tilt_check(model: &ResolvedModel, gains: &PidGains, tilt: f64) -> Result<
             run: RunSettings::default(),
             x0: None,
             phi0: tilt,
+            ..SimSettings::default()
         },
         &crate::progress::Silent,
     )?;

@@ -1,4 +1,4 @@
-//! Physical checks on a mechanical model (DESIGN section 2): facts any correct model satisfies,
+//! Physical checks on a mechanical model (docs/src/conventions.md): facts any correct model satisfies,
 //! computed on the model under audit without looking at the hand model.
 
 use nalgebra::DMatrix;

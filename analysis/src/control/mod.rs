@@ -44,6 +44,6 @@ pub use plant::{InputMap, Measured, Plant};
 pub use record::{loop_metrics, run_closed_loop, ClosedLoopRun};
 pub use reference::Profile;
 pub use settings::{
-    AntiWindup, ControllerSettings, PitchPid, Setpoint, VelocityLoop, YawLoop, STUDY_PD,
+    check_tilt, AntiWindup, ControllerSettings, PitchPid, Setpoint, VelocityLoop, YawLoop, STUDY_PD,
 };
 pub use simulate::{simulate, RunEnd, RunSettings, Trajectory};

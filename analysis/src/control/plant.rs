@@ -1,6 +1,6 @@
 //! How the controller sees a model: which states it measures and which input directions its
 //! pitch force F and yaw torque T act along, found from the model's state and input names so any
-//! model with the DESIGN §2 names works (a generated one or an `--ir` file).
+//! model with the docs/src/conventions.md names works (a generated one or an `--ir` file).
 
 use serde::Serialize;
 use twv_model::ModelInfo;

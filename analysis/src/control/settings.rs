@@ -53,11 +53,62 @@ impl Setpoint {
         }
     }
 
+    /// A setpoint from its text (`study`, `zero`, `sine:A`, an angle in rad), a number (an
+    /// angle) or its JSON object (`{"kind": "sine", "amplitude": 0.03}`).
+    pub fn from_value(v: &serde_json::Value) -> Result<Self, crate::Error> {
+        let bad = |what: String| {
+            crate::Error::input(
+                "setpoint",
+                format!("{what}: use study, zero, sine:A or an angle in rad"),
+            )
+        };
+        match v {
+            serde_json::Value::String(text) => text.parse().map_err(|_| bad(format!("`{text}`"))),
+            serde_json::Value::Number(n) => Ok(Setpoint::Constant {
+                value: n.as_f64().ok_or_else(|| bad(n.to_string()))?,
+            }),
+            other => serde_json::from_value(other.clone()).map_err(|e| bad(e.to_string())),
+        }
+    }
+
     /// The angle the loop regulates Φ to at rest (0 unless a constant lean is asked for).
     pub fn rest_value(&self) -> f64 {
         match *self {
             Setpoint::Constant { value } => value,
             _ => 0.0,
+        }
+    }
+}
+
+impl std::str::FromStr for Setpoint {
+    type Err = ();
+
+    /// `study` (0.03·sin Φ), `zero`, `sine:A` or a constant angle in rad.
+    fn from_str(text: &str) -> Result<Self, ()> {
+        let t = text.trim();
+        Ok(match t {
+            "study" => Setpoint::STUDY,
+            "zero" | "0" => Setpoint::Zero,
+            _ => match t.strip_prefix("sine:") {
+                Some(a) => Setpoint::Sine {
+                    amplitude: a.trim().parse().map_err(|_| ())?,
+                },
+                None => Setpoint::Constant {
+                    value: t.parse().map_err(|_| ())?,
+                },
+            },
+        })
+    }
+}
+
+impl std::fmt::Display for Setpoint {
+    /// The text [`FromStr`](std::str::FromStr) reads back.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            s if s == Setpoint::STUDY => f.write_str("study"),
+            Setpoint::Zero => f.write_str("zero"),
+            Setpoint::Sine { amplitude } => write!(f, "sine:{amplitude}"),
+            Setpoint::Constant { value } => write!(f, "{value}"),
         }
     }
 }
@@ -80,13 +131,20 @@ pub enum AntiWindup {
     },
 }
 
+impl AntiWindup {
+    /// Back-calculation with its default tracking time, 0.3 s.
+    pub const fn back_calculation() -> Self {
+        AntiWindup::BackCalculation { tracking_time: 0.3 }
+    }
+}
+
 /// The inner loop: F = Kp e + Ki ∫e + Kd Φ̇_f with e = Φ − Φ_ref, saturated to |F| ≤ F_max.
 ///
 /// Derivative on the measurement: the rate term uses the measured pitch rate w_y = Φ̇ (a gyro),
 /// never a differentiated error, so setpoint changes cause no derivative kick and no numerical
 /// differentiation is needed. With a filter the rate term is Kd·d, ḋ = (w_y − d)/τ_f, a state.
 ///
-/// Sign (DESIGN §2): Φ > 0 is a forward lean and F1 > 0 pushes the base forward, so the base
+/// Sign (docs/src/conventions.md): Φ > 0 is a forward lean and F1 > 0 pushes the base forward, so the base
 /// must push *towards* the lean: F = +Kp Φ + Kd Φ̇ stabilises the upright iff Kd > 0 and
 /// Kp > M_x g (Routh–Hurwitz, [`crate::linear::CartPendulum::routh_hurwitz_stable`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -261,4 +319,18 @@ impl ControllerSettings {
             + usize::from(self.pitch.derivative_filter.is_some())
             + usize::from(self.velocity.as_ref().is_some_and(|v| v.ki != 0.0))
     }
+}
+
+/// An initial tilt `value` [rad] of the setting `field`: finite and at most a half turn.
+pub fn check_tilt(field: &str, value: f64) -> Result<(), crate::Error> {
+    if value.is_finite() && value.abs() <= core::f64::consts::PI {
+        return Ok(());
+    }
+    Err(crate::Error::input(
+        field,
+        format!(
+            "{value} rad must be finite and at most a half turn (|Φ0| ≤ π; beyond it the \
+             pendulum is below its hinge: give the whole initial state x0 instead)"
+        ),
+    ))
 }

@@ -3,7 +3,7 @@
 //! This is the second route used by `twv audit`. It shares nothing with the CasADi derivation or
 //! the IR: every term of M(q), C(q,p) p, F(q) and Q(u) below was derived by hand (Kane's method /
 //! Euler–Poincaré on SE(2), see `DERIVATION.md` next to this file) and written out as a formula.
-//! The conventions are those of DESIGN section 2, so the audit can compare term by term.
+//! The conventions are those of docs/src/conventions.md, so the audit can compare term by term.
 //!
 //! Every formula is written once, generically over [`scalar::Real`], and evaluated with `f64` for
 //! values and with [`scalar::Dual`] for exact derivatives (Jacobians, Ṁ). ṗ = M⁻¹(Q − Cp − F) is a

@@ -1,6 +1,6 @@
 //! Vehicle parameters, as the hand model reads them.
 
-/// The physical parameters of every vehicle model (SI units; DESIGN section 2). Field names follow
+/// The physical parameters of every vehicle model (SI units; docs/src/conventions.md). Field names follow
 /// the TOML keys (`I1` → `i1`, `R` → `r`, `J_a` → `j_a`, ...). Inertias are principal moments
 /// `[Ixx, Iyy, Izz]` about the body's own centroid. File loading lives elsewhere; this is a plain
 /// value.

@@ -53,9 +53,9 @@ const D7: f64 = 69997945.0 / 29380423.0;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct DopriOptions {
-    /// Relative tolerance. Default 1e-8.
+    /// Relative tolerance. Default 1e-9.
     pub rtol: f64,
-    /// Absolute tolerance. Default 1e-10.
+    /// Absolute tolerance. Default 1e-12.
     pub atol: f64,
     /// Include the tangent vectors in the error norm. Default false: the step size then depends
     /// on x only, as for the plain ODE; turn it on when the tangent dynamics is stiffer than the
@@ -84,8 +84,8 @@ pub struct DopriOptions {
 impl Default for DopriOptions {
     fn default() -> Self {
         Self {
-            rtol: 1e-8,
-            atol: 1e-10,
+            rtol: 1e-9,
+            atol: 1e-12,
             tangent_error_control: false,
             h_init: None,
             h_max: f64::INFINITY,

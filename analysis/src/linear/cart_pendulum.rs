@@ -1,4 +1,4 @@
-//! The planar cart–pendulum that every twv vehicle reduces to with T2 = 0 (DESIGN §2), in
+//! The planar cart–pendulum that every twv vehicle reduces to with T2 = 0 (docs/src/conventions.md), in
 //! closed form: its linearisation at the upright and the Routh–Hurwitz conditions of the PID
 //! pitch loop. Used as the reference the numerical analysis is checked against.
 //!
@@ -28,7 +28,7 @@ pub struct CartPendulum {
 }
 
 impl CartPendulum {
-    /// From the vehicle parameters of DESIGN §2: base mass `m1`, pendulum mass `m2`, centroid
+    /// From the vehicle parameters of docs/src/conventions.md: base mass `m1`, pendulum mass `m2`, centroid
     /// distance `b`, pendulum inertia `i2_yy`, gravity `g` (M_x = m1 + m2).
     pub fn from_vehicle(m1: f64, m2: f64, b: f64, i2_yy: f64, g: f64) -> Result<Self, LinearError> {
         check_finite("cart-pendulum parameters", [m1, m2, b, i2_yy, g].iter())?;

@@ -6,7 +6,7 @@ use twv_model::Model;
 
 use super::error::{check_finite, LinearError};
 
-/// Name of the pitch angle state in every twv vehicle model (DESIGN §2).
+/// Name of the pitch angle state in every twv vehicle model (docs/src/conventions.md).
 pub const PHI: &str = "phi";
 /// Name of the pitch rate state (w_y = Φ̇).
 pub const PITCH_RATE: &str = "w_y";

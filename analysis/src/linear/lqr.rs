@@ -12,9 +12,11 @@ use super::modes::{eigenvalues, spectral_abscissa};
 pub struct Lqr {
     /// How the Riccati solver ended; the rest is meaningful only for `Solved`.
     pub status: CareStatus,
-    /// Gain K (m × n), u = −K x.
+    /// Gain K (m × n), u = −K x; in JSON one list per row.
+    #[serde(serialize_with = "crate::linear::rows")]
     pub k: DMatrix<f64>,
-    /// Riccati solution P.
+    /// Riccati solution P; in JSON one list per row.
+    #[serde(serialize_with = "crate::linear::rows")]
     pub p: DMatrix<f64>,
     /// Relative Riccati residual.
     pub residual: f64,

@@ -28,3 +28,11 @@ pub use modes::{eigenvalues, modes, spectral_abscissa, Mode, ModeKind};
 pub use pitch::{ClosedLoop, GainBasis, LoopOptions, PidGains, PitchLoop};
 pub use report::{analyse_pitch, loop_response, ExclusionDisk, LoopResponse, PitchAnalysis};
 pub use siso::{HiddenKind, HiddenPart, SisoPlant};
+
+/// A matrix as JSON in its natural shape: one list per row (nalgebra's own serialisation is
+/// its column-major storage, which a reader would take for rows).
+pub fn rows<S: serde::Serializer>(m: &nalgebra::DMatrix<f64>, s: S) -> Result<S::Ok, S::Error> {
+    use serde::Serialize;
+    let rows: Vec<Vec<f64>> = m.row_iter().map(|r| r.iter().copied().collect()).collect();
+    rows.serialize(s)
+}

@@ -143,6 +143,9 @@ pub fn vehicle_defaults(model: &str, paper: &str, segway: &str) -> Option<ParamS
     })
 }
 
+/// The model a front end runs when none is named: the study's vehicle.
+pub const DEFAULT_MODEL: &str = "vehicle8";
+
 /// The names of the shipped models.
 pub fn shipped_models() -> Vec<&'static str> {
     twv_generated::MODELS
@@ -256,6 +259,39 @@ impl ResolvedModel {
         self.ir.inputs().iter().map(|s| s.name.as_str()).collect()
     }
 
+    /// The unit of a state, input or parameter by name (SI, from the IR).
+    pub fn unit_of(&self, name: &str) -> Option<&str> {
+        let ir = &self.ir;
+        ir.states()
+            .iter()
+            .chain(ir.inputs())
+            .find(|s| s.name == name)
+            .map(|s| s.unit.as_str())
+            .or_else(|| {
+                ir.params()
+                    .iter()
+                    .find(|p| p.name == name)
+                    .map(|p| p.unit.as_str())
+            })
+    }
+
+    /// The units of the columns of a time series: time, the model's variables, and `extra`
+    /// (name, unit) for the rest.
+    pub fn column_units(&self, columns: &[String], extra: &[(&str, &str)]) -> Vec<String> {
+        columns
+            .iter()
+            .map(|c| {
+                let known = extra.iter().find(|(n, _)| n == c).map(|(_, u)| *u);
+                match (c.as_str(), known) {
+                    ("t", _) => "s",
+                    (_, Some(u)) => u,
+                    (name, None) => self.unit_of(name).unwrap_or(""),
+                }
+                .to_string()
+            })
+            .collect()
+    }
+
     /// Index of a state by name.
     pub fn state_index(&self, name: &str) -> Option<usize> {
         self.ir.states().iter().position(|s| s.name == name)
@@ -272,22 +308,38 @@ impl ResolvedModel {
         Ok(x)
     }
 
-    /// This model with some parameters set by TOML key (`m2`, or `I2` with all its components),
-    /// checked like a parameter file's values; errors name the key. `origin` describes where the
-    /// values came from, for messages and reports.
+    /// This model with some parameters set, each by its TOML key (`m2`, or `I2` with all its
+    /// components) or by its IR name (`I2_yy`, one component): both vocabularies, so the values
+    /// of [`Self::param_values`] round-trip. Checked like a parameter file's values; errors name
+    /// the parameter. `origin` describes where the values came from, for messages and reports.
     pub fn with_overrides(&self, overrides: &[(String, Vec<f64>)], origin: &str) -> Result<Self> {
         let params = self.ir.params();
         let mut values = self.params.clone();
+        let mut set = vec![false; params.len()];
         for (key, given) in overrides {
-            let slots: Vec<usize> = (0..params.len())
+            let mut slots: Vec<usize> = (0..params.len())
                 .filter(|&i| params[i].key == *key)
                 .collect();
             if slots.is_empty() {
+                slots = (0..params.len())
+                    .filter(|&i| params[i].name == *key)
+                    .collect();
+            }
+            if slots.is_empty() {
                 let mut known: Vec<&str> = params.iter().map(|p| p.key.as_str()).collect();
                 known.dedup();
+                let names: Vec<&str> = params
+                    .iter()
+                    .filter(|p| p.index.is_some())
+                    .map(|p| p.name.as_str())
+                    .collect();
                 return Err(Error::input(
                     "params",
-                    format!("unknown parameter `{key}` (known: {})", known.join(", ")),
+                    format!(
+                        "unknown parameter `{key}` (file keys: {}; components: {})",
+                        known.join(", "),
+                        names.join(", ")
+                    ),
                 ));
             }
             if given.len() != slots.len() {
@@ -301,6 +353,15 @@ impl ResolvedModel {
                 ));
             }
             for (&i, &v) in slots.iter().zip(given) {
+                if std::mem::replace(&mut set[i], true) {
+                    return Err(Error::input(
+                        "params",
+                        format!(
+                            "`{}` is given twice (as {key} and by another name)",
+                            params[i].name
+                        ),
+                    ));
+                }
                 values[i] = v;
             }
         }
@@ -313,25 +374,23 @@ impl ResolvedModel {
         })
     }
 
-    /// This model with parameters set by their IR names (`m2`, `I2_xx`: one value each),
-    /// checked like a parameter file's values; errors name the parameter.
+    /// This model with parameters set by their IR names (`m2`, `I2_xx`: one value each) or
+    /// TOML keys of one component: see [`Self::with_overrides`].
     pub fn with_param_values(&self, values: &[(String, f64)], origin: &str) -> Result<Self> {
-        let params = self.ir.params();
-        let mut out = self.params.clone();
-        for (name, v) in values {
-            let i = params
-                .iter()
-                .position(|p| p.name == *name)
-                .ok_or_else(|| Error::input("params", format!("unknown parameter `{name}`")))?;
-            out[i] = *v;
-        }
-        let label = format!("{origin} (over {})", self.params_origin);
-        twv_ir::check_values(&out, &label, params)?;
-        Ok(Self {
-            params: out,
-            params_origin: label,
-            ..self.clone()
-        })
+        let overrides: Vec<(String, Vec<f64>)> =
+            values.iter().map(|(k, v)| (k.clone(), vec![*v])).collect();
+        self.with_overrides(&overrides, origin)
+    }
+
+    /// Every parameter by its IR name (`m2`, `I2_yy`) with its value: what
+    /// [`Self::with_overrides`] takes back.
+    pub fn param_values(&self) -> Vec<(String, f64)> {
+        self.ir
+            .params()
+            .iter()
+            .zip(&self.params)
+            .map(|(p, v)| (p.name.clone(), *v))
+            .collect()
     }
 
     /// Whether the model runs on generated code.

@@ -46,6 +46,11 @@ pub struct ReportSettings {
     pub audit_tolerance: f64,
 }
 
+impl ReportSettings {
+    /// The folder a report is written to unless another is named.
+    pub const DEFAULT_OUT: &'static str = "report";
+}
+
 impl Default for ReportSettings {
     fn default() -> Self {
         Self {

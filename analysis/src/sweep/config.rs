@@ -70,6 +70,46 @@ impl MetricSettings {
     /// Checks what a point cannot report as its status (the rest ends a point's run as
     /// `blew_up` or `failed`, like any other run that cannot go on).
     pub fn validate(&self) -> Result<(), SweepError> {
+        let positive: [(&'static str, f64); 5] = [
+            ("h", self.h),
+            ("t_sample", self.t_sample),
+            ("t_end", self.t_end),
+            ("sample", self.sample),
+            ("fall_angle", self.fall_angle),
+        ];
+        for (field, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(SweepError::Setting {
+                    field,
+                    reason: format!("{v} must be finite and > 0"),
+                });
+            }
+        }
+        if !(self.transient.is_finite() && self.transient >= 0.0) {
+            return Err(SweepError::Setting {
+                field: "transient",
+                reason: format!("{} must be finite and ≥ 0", self.transient),
+            });
+        }
+        if self.iterations == 0 {
+            return Err(SweepError::Setting {
+                field: "iterations",
+                reason: "must be at least 1".into(),
+            });
+        }
+        if self.sample > self.t_end || self.h > self.t_sample {
+            return Err(SweepError::Setting {
+                field: if self.h > self.t_sample {
+                    "h"
+                } else {
+                    "sample"
+                },
+                reason: format!(
+                    "h = {} must be ≤ t_sample = {}, and sample = {} ≤ t_end = {}",
+                    self.h, self.t_sample, self.sample, self.t_end
+                ),
+            });
+        }
         match self.settle_distance {
             Some(d) if !(d.is_finite() && d > 0.0) => Err(SweepError::Setting {
                 field: "settle_distance",

@@ -2,7 +2,7 @@
 //! (written by the Python modeling step and compiled at -O3 by build.rs), a correctness gate
 //! that checks it against the generated Rust kernels, and a small paired timing harness.
 //!
-//! The C is the peer the Rust kernels are judged against (DESIGN section 6): both come from the
+//! The C is the peer the Rust kernels are judged against (docs/src/benchmarks.md): both come from the
 //! same CasADi graph, so a speed ratio only means something if they also compute the same numbers,
 //! which [`gate`] checks before anything is timed.
 //!

@@ -1,4 +1,4 @@
-"""The vehicle models of DESIGN section 2, written as multibody data.
+"""The vehicle models of docs/src/conventions.md, written as multibody data.
 
 Frames: N inertial (z up); A = N yawed by theta (the planar joint, a_x forward, a_y left);
 B = A pitched by phi about a_y (the pendulum). Coordinates (phi, x, y, theta), quasi-velocities

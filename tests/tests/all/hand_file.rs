@@ -172,10 +172,10 @@ mod audit {
 
     #[test]
     fn the_readme_example_agrees_with_the_derivation() {
-        let readme = std::fs::read_to_string(repo("README.md")).unwrap();
+        let readme = std::fs::read_to_string(repo("docs/src/hand-file.md")).unwrap();
         let start = readme
             .find("# examples/hand/vehicle7.toml (abridged)")
-            .expect("the README's hand file example");
+            .expect("the hand-file page's example");
         let block = &readme[start..start + readme[start..].find("```").unwrap()];
         let report = audit_text(&resolved("vehicle7"), block);
         assert!(report.passed, "{}", report.table());

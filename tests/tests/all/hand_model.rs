@@ -1,4 +1,4 @@
-//! Physics tests of the hand model: facts any correct model satisfies (DESIGN section 2).
+//! Physics tests of the hand model: facts any correct model satisfies (docs/src/conventions.md).
 
 // Index loops mirror the matrix formulas (M[i][j], J[i][j]) and read better than iterator chains.
 #![allow(clippy::needless_range_loop)]

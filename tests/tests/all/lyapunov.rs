@@ -540,7 +540,7 @@ fn settings_are_validated() {
     };
     assert_eq!(
         (o.rtol, o.atol, o.tangent_error_control),
-        (1e-9, 1e-10, true)
+        (1e-9, 1e-12, true)
     );
     assert!(serde_json::from_str::<LyapunovSettings>(r#"{"t_sampel": 0.1}"#).is_err());
 }

@@ -6,15 +6,16 @@
 mod common;
 
 mod api;
-mod api_json;
 mod audit;
 mod bicycle_runs;
 mod codegen;
 mod control;
+mod docs;
 mod hand_file;
 mod hand_model;
 mod isa;
 mod jit;
+mod jobs;
 mod linear;
 mod lyapunov;
 mod lyapunov_parts;

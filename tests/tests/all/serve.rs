@@ -7,9 +7,10 @@ use std::net::TcpStream;
 
 use serde_json::{json, Value};
 use twv_analysis::api::{self, LinearSettings, Silent, SimSettings, TuneSettings};
+use twv_analysis::jobs::{exponent_verdict, ExponentSettings, ExponentVerdict};
 use twv_analysis::model::{ModelSpec, ResolvedModel};
 use twv_analysis::sweep::{PointResult, Status};
-use twv_serve::routes::{endpoints, exponent_verdict, ExponentVerdict, LyapunovRequest};
+use twv_serve::routes::endpoints;
 use twv_serve::{respond, CancelFlag, ServeSettings, Server, State};
 
 fn model() -> ResolvedModel {
@@ -62,7 +63,7 @@ fn every_endpoint_gives_the_librarys_numbers() {
     assert_eq!(phi, lib.rows.iter().map(|r| r[column]).collect::<Vec<_>>());
 
     let margins = json!({"gains": gains, "frequency_points": 300});
-    let answer = ok(&state, "/api/margins", &json!({ "settings": margins }));
+    let answer = ok(&state, "/api/linearize", &json!({ "settings": margins }));
     let settings: LinearSettings = serde_json::from_value(margins).unwrap();
     let lib = api::analyse(&m, &settings).unwrap();
     assert_eq!(answer["result"], library(&lib));
@@ -85,9 +86,9 @@ fn every_endpoint_gives_the_librarys_numbers() {
     let answer = ok(
         &state,
         "/api/phase",
-        &json!({"settings": {"controller": controller, "tilts": [0.1, -0.3]}}),
+        &json!({"settings": {"portraits": [["current gains", {"closed": controller}]], "tilts": [0.1, -0.3]}}),
     );
-    let runs = answer["series"].as_array().unwrap();
+    let runs = answer["series"][0].as_array().unwrap();
     assert_eq!(runs.len(), 2);
     assert_eq!(runs[1]["phi0"], json!(-0.3));
     assert_eq!(runs[1]["phi"][0], json!(-0.3));
@@ -95,16 +96,28 @@ fn every_endpoint_gives_the_librarys_numbers() {
     // The exponent is the map's metric at that one point, with its verdict.
     let lyap = ok(
         &state,
-        "/api/lyapunov",
+        "/api/exponent",
         &json!({"settings": {"controller": controller}}),
     );
     let row = json!({
         "grid": {"kp": {"lo": 3000.0, "hi": 3000.0, "n": 1}, "kd": {"lo": 900.0, "hi": 900.0, "n": 1}},
         "metric": "max-lyapunov",
         "controller": controller,
-        "metric_settings": library(&LyapunovRequest::default().metric_settings),
+        "metric_settings": library(&ExponentSettings::default().metric_settings),
     });
-    let map = ok(&state, "/api/map", &json!({ "settings": row }));
+    let map = ok(&state, "/api/sweep", &json!({ "settings": row }));
+    // The old name of the route answers too (an alias of the job).
+    assert_eq!(
+        ok(&state, "/api/map", &json!({ "settings": row }))["result"],
+        map["result"]
+    );
+    // Flat options, the CLI's and Python's vocabulary, give the same run as the settings.
+    let by_options = ok(
+        &state,
+        "/api/exponent",
+        &json!({"options": {"kp": 3000.0, "kd": 900.0, "f_max": 800.0}}),
+    );
+    assert_eq!(by_options["result"], lyap["result"]);
     assert_eq!(lyap["result"]["point"], map["result"][0]);
     assert_eq!(lyap["result"]["verdict"], json!("stable"));
     assert!(lyap["result"]["point"]["value"].as_f64().unwrap() < 0.0);
@@ -115,7 +128,7 @@ fn parameters_are_set_by_name_and_checked_like_a_file() {
     let state = State::new(model());
     let answer = ok(
         &state,
-        "/api/margins",
+        "/api/linearize",
         &json!({"params": {"m2": 12.0, "b": 0.7}, "settings": {}}),
     );
     let heavier = model()
@@ -124,7 +137,14 @@ fn parameters_are_set_by_name_and_checked_like_a_file() {
     let lib = api::analyse(&heavier, &LinearSettings::default()).unwrap();
     assert_eq!(answer["result"], library(&lib));
     // A heavier, longer pendulum moves the open-loop pole: the parameters reached the model.
-    let default = ok(&state, "/api/margins", &json!({}));
+    let default = ok(&state, "/api/linearize", &json!({}));
+    // The file's keys work too, a component array for an inertia.
+    let by_key = ok(
+        &state,
+        "/api/linearize",
+        &json!({"params": {"m2": 12.0, "b": 0.7, "I2": [0.81, 0.81, 0.03]}}),
+    );
+    assert_eq!(by_key["result"]["open_loop"], answer["result"]["open_loop"]);
     assert_ne!(
         answer["result"]["open_loop"][0],
         default["result"]["open_loop"][0]
@@ -160,7 +180,7 @@ fn malformed_requests_get_400_with_a_reason() {
         &state,
         "/api/simulate",
         br#"{"settings": {"phi0": "a lot"}}"#,
-        400,
+        422,
         &["phi0", "invalid type"],
     );
     error(
@@ -170,13 +190,21 @@ fn malformed_requests_get_400_with_a_reason() {
         400,
         &["UTF-8"],
     );
-    error(&state, "/api/map", b"{}", 400, &["grid", "metric"]);
+    // The default map (100 × 100) is more than one request may ask.
+    error(&state, "/api/sweep", b"{}", 413, &["points", "limit"]);
     error(
         &state,
         "/api/tune",
         br#"{"settings": {"spec": "dpm>=banana"}}"#,
-        400,
+        422,
         &["spec"],
+    );
+    error(
+        &state,
+        "/api/simulate",
+        br#"{"options": {"kpp": 1}}"#,
+        422,
+        &["kpp", "no such option"],
     );
     // Valid JSON the library refuses: 422, naming the field.
     error(
@@ -188,7 +216,7 @@ fn malformed_requests_get_400_with_a_reason() {
     );
     error(
         &state,
-        "/api/lyapunov",
+        "/api/exponent",
         br#"{"settings": {"controller": {"pitch": {"saturation": -5}}}}"#,
         422,
         &["F_max", "-5"],
@@ -199,7 +227,7 @@ fn malformed_requests_get_400_with_a_reason() {
     assert_eq!(respond(&state, "GET", "/etc/passwd", b"").status, 404);
     assert_eq!(respond(&state, "GET", "/../Cargo.toml", b"").status, 404);
     for (method, path) in endpoints() {
-        assert_ne!(respond(&state, method, path, b"").status, 404, "{path}");
+        assert_ne!(respond(&state, method, &path, b"").status, 404, "{path}");
     }
     let page = respond(&state, "GET", "/", b"");
     assert_eq!(
@@ -212,60 +240,83 @@ fn malformed_requests_get_400_with_a_reason() {
 #[test]
 fn oversized_requests_are_refused_before_any_work() {
     let state = State::new(model());
-    let cases: [(&str, Value, &[&str]); 9] = [
+    let cases: [(&str, Value, u16, &[&str]); 11] = [
         (
             "/api/simulate",
-            json!({"settings": {"run": {"t_end": 1e6}}}),
-            &["t_end", "limit"],
+            json!({"settings": {"run": {"t_end": 200.0, "sample": 0.1}}}),
+            413,
+            &["horizon", "limit"],
         ),
         (
             "/api/simulate",
             json!({"settings": {"run": {"t_end": 100.0, "integrator": {"kind": "rk4", "h": 1e-6}}}}),
+            413,
             &["steps", "limit"],
         ),
+        // More samples than a run may hold at all: the library refuses it, naming the field.
         (
             "/api/simulate",
-            json!({"settings": {"run": {"sample": 1e-6}}}),
+            json!({"settings": {"run": {"sample": 1e-7}}}),
+            422,
+            &["samples", "sample interval"],
+        ),
+        // Fewer, but more than one request may return.
+        (
+            "/api/simulate",
+            json!({"settings": {"run": {"t_end": 100.0, "sample": 1e-3}}}),
+            413,
             &["samples", "limit"],
+        ),
+        // An adaptive run's steps are bounded by its smallest step: none given, no bound.
+        (
+            "/api/simulate",
+            json!({"options": {"integrator": "dopri", "h_max": 1e-8, "t_end": 100}}),
+            413,
+            &["unbounded", "steps", "h_min"],
         ),
         (
             "/api/phase",
             json!({"settings": {"tilts": vec![0.1; 100]}}),
-            &["tilts", "limit"],
+            413,
+            &["samples", "limit"],
         ),
         (
-            "/api/lyapunov",
+            "/api/exponent",
             json!({"settings": {"tilt": 1e308}}),
-            &["tilt", "limit"],
+            422,
+            &["tilt", "half turn"],
         ),
         (
             "/api/simulate",
             json!({"settings": {"phi0": -4.0}}),
-            &["phi0", "limit"],
+            422,
+            &["phi0", "half turn"],
         ),
         (
-            "/api/margins",
+            "/api/linearize",
             json!({"settings": {"frequency_points": 1_000_000}}),
+            422,
             &["frequency_points"],
         ),
         (
-            "/api/map",
+            "/api/sweep",
             json!({"settings": {"grid": {"kp": {"lo": 0, "hi": 8000, "n": 1000}, "kd": {"lo": 0, "hi": 4000, "n": 1000}}, "metric": "max-lyapunov"}}),
+            413,
             &["points", "limit"],
         ),
         (
-            "/api/lyapunov",
+            "/api/exponent",
             json!({"settings": {"metric_settings": {"h": 1e-3, "t_sample": 0.1, "iterations": 10000000, "transient": 0.0, "t_end": 10.0, "sample": 0.01, "fall_angle": 1.5}}}),
+            413,
             &["horizon", "limit"],
         ),
     ];
-    for (path, body, needles) in cases {
+    for (path, body, status, needles) in cases {
         let started = std::time::Instant::now();
-        error(&state, path, body.to_string().as_bytes(), 413, needles);
+        error(&state, path, body.to_string().as_bytes(), status, needles);
         assert!(started.elapsed().as_secs_f64() < 1.0, "{path} did work");
     }
 }
-
 #[test]
 fn the_exponent_verdict_follows_the_value_and_its_resolution() {
     let point = |value: Option<f64>, status| PointResult {
@@ -287,7 +338,7 @@ fn the_exponent_verdict_follows_the_value_and_its_resolution() {
     // And on the model: gains below M_x g cannot hold the pendulum up.
     let state = State::new(model());
     let weak = json!({"settings": {"controller": {"pitch": {"gains": {"kp": 300.0, "ki": 0.0, "kd": 900.0}}}}});
-    let answer = ok(&state, "/api/lyapunov", &weak);
+    let answer = ok(&state, "/api/exponent", &weak);
     assert_eq!(answer["result"]["verdict"], json!("fell"), "{answer}");
 }
 
@@ -312,8 +363,17 @@ fn the_server_answers_over_a_socket_refuses_huge_bodies_unread_and_stops() {
     let addr = server.addr();
     assert!(addr.ip().is_loopback());
     static STOP: CancelFlag = CancelFlag::new();
+    /// Stops the server however the test ends: a failed assertion must not leave the scope
+    /// waiting for a server that never stops.
+    struct StopOnDrop;
+    impl Drop for StopOnDrop {
+        fn drop(&mut self) {
+            STOP.raise();
+        }
+    }
     std::thread::scope(|scope| {
         scope.spawn(|| server.run(&STOP));
+        let _stop = StopOnDrop;
         let page = http(
             addr,
             b"GET / HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n",

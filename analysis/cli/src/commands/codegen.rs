@@ -1,40 +1,38 @@
-//! `twv codegen`: the Rust the emitter produces for a model, formatted for people to audit.
-
-use std::path::PathBuf;
+//! `twv codegen`: the registry's `codegen` job; `--out FILE` writes the source (atomically)
+//! instead of printing it, and a parameter file folds its values in.
 
 use anyhow::Result;
-use clap::Args;
-use twv_analysis::api::{generate, CodegenSettings};
+use clap::{ArgMatches, Command, FromArgMatches};
+use serde_json::Value;
+use twv_analysis::jobs::AnyJob;
 use twv_analysis::output::write_atomic;
 
 use crate::common::{print, Context, ModelArgs, Outcome};
+use crate::job;
 
-/// Print the generated Rust of a model (prettyplease-formatted).
-#[derive(Args, Debug)]
-pub struct CodegenArgs {
-    #[command(flatten)]
-    pub model: ModelArgs,
-    /// Name of the emitted struct [default: the model name in CamelCase]
-    #[arg(long, value_name = "IDENT")]
-    pub name: Option<String>,
-    /// Fold the parameters of --params (or the defaults) into the code as constants
-    #[arg(long)]
-    pub baked: bool,
-    /// Write to this file (atomically) instead of stdout
-    #[arg(long, value_name = "FILE")]
-    pub out: Option<PathBuf>,
+/// `--out` is the file of the source here.
+pub fn augment(cmd: Command) -> Command {
+    cmd.mut_arg("out", |a| {
+        a.value_name("FILE")
+            .help("Write the source to this file (atomically) instead of stdout")
+    })
 }
 
-pub fn run(args: &CodegenArgs, ctx: &Context) -> Result<Outcome> {
-    let model = args.model.resolve(ctx)?;
-    let source = generate(
-        &model,
-        &CodegenSettings {
-            name: args.name.clone(),
-            baked: args.baked || args.model.params.is_some(),
-        },
-    )?;
-    match &args.out {
+pub fn run(j: &dyn AnyJob, m: &ArgMatches, ctx: &Context) -> Result<Outcome> {
+    let args = ModelArgs::from_arg_matches(m)?;
+    // Parameters given in a file are what the code is for: fold them in.
+    let more: Vec<(String, Value)> = if args.params.is_some() {
+        vec![("baked".into(), Value::Bool(true))]
+    } else {
+        Vec::new()
+    };
+    let prepared = job::prepare(j, m, &more)?;
+    if job::printed_settings(prepared.as_ref(), m)? {
+        return Ok(Outcome::Done);
+    }
+    let done = prepared.run(&args.resolve(ctx)?, &ctx.bar())?;
+    let source = done.summary();
+    match job::out_dir(m) {
         Some(path) => write_atomic(path, source.as_bytes())?,
         None => print(&source)?,
     }

@@ -1,43 +1,62 @@
-//! One file per command: its arguments, their translation into the library's settings, the
-//! call, and what is written and printed.
+//! The subcommands: every job of the registry through one generic path (`crate::job`), with
+//! what only the command line does for a few of them — `sweep` writes resumable shards, `audit`
+//! audits every vehicle by default, `codegen --out` writes a source file — and the tools that
+//! are not jobs (`report`, `merge`, `serve`), one file each.
 
 pub mod audit;
 pub mod codegen;
-pub mod disturb;
-pub mod eval;
-pub mod linear;
-pub mod lyap;
 pub mod merge;
-pub mod phase;
 pub mod report;
-pub mod ride;
 pub mod serve;
-pub mod sim;
 pub mod sweep;
-pub mod tune;
 
 use anyhow::Result;
+use clap::{ArgMatches, FromArgMatches};
+use serde_json::Value;
+use twv_analysis::jobs::{self, AnyJob};
 
-use crate::args::Command;
 use crate::common::{Context, Outcome};
+use crate::job;
 
-/// Runs one command.
-pub fn run(command: &Command, ctx: &Context) -> Result<Outcome> {
-    match command {
-        Command::Eval(a) => eval::run(a, ctx),
-        Command::Codegen(a) => codegen::run(a, ctx),
-        Command::Audit(a) => audit::run(a, ctx),
-        Command::Lyap(a) => lyap::run(a, ctx),
-        Command::Sim(a) => sim::run(a, ctx),
-        Command::Ride(a) => ride::run(a, ctx),
-        Command::Disturb(a) => disturb::run(a, ctx),
-        Command::Phase(a) => phase::run(a, ctx),
-        Command::Linear(a) => linear::run(a, ctx),
-        Command::Tune(a) => tune::run(a, ctx),
-        Command::Report(a) => report::run(a, ctx),
-        Command::Sweep(a) => sweep::run(a, ctx),
-        Command::Merge(a) => merge::run(a, ctx),
-        Command::Serve(a) => serve::run(a, ctx),
+/// The subcommand of a job.
+pub fn job_command(j: &'static dyn AnyJob) -> clap::Command {
+    let cmd = job::command(j, j.files());
+    match j.name() {
+        "sweep" => sweep::augment(cmd),
+        "audit" => audit::augment(cmd),
+        "codegen" => codegen::augment(cmd),
+        _ => cmd,
+    }
+}
+
+/// Runs the subcommand `name` with its matches.
+pub fn run(name: &str, m: &ArgMatches, ctx: &Context) -> Result<Outcome> {
+    match name {
+        "report" => report::run(&report::ReportArgs::from_arg_matches(m)?, ctx),
+        "merge" => merge::run(&merge::MergeArgs::from_arg_matches(m)?, ctx),
+        "serve" => serve::run(&serve::ServeArgs::from_arg_matches(m)?, ctx),
+        name => {
+            let j = jobs::find(name)?;
+            let has_out = job::out_dir(m).is_some();
+            match j.name() {
+                "sweep" => sweep::run(j, m, ctx),
+                "audit" => audit::run(j, m, ctx),
+                "codegen" => codegen::run(j, m, ctx),
+                // The running estimates only when they are written.
+                "lyapunov" if !has_out => job::run(j, m, ctx, &[("running".into(), false.into())]),
+                // The frequency response for the figures, when they are written.
+                "linearize" if has_out => job::run(
+                    j,
+                    m,
+                    ctx,
+                    &[(
+                        "frequency_points".into(),
+                        Value::from(twv_analysis::api::FIGURE_FREQUENCY_POINTS),
+                    )],
+                ),
+                _ => job::run(j, m, ctx, &[]),
+            }
+        }
     }
 }
 

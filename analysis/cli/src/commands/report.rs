@@ -18,42 +18,49 @@ pub struct ReportArgs {
     /// vehicles/paper.toml (segway7 in the audit: vehicles/segway.toml), embedded]
     #[arg(long, value_name = "FILE")]
     pub params: Option<PathBuf>,
-    /// Output folder (index.html, figures/, data/, results.json)
-    #[arg(long, value_name = "DIR", default_value = "report")]
-    pub out: PathBuf,
+    /// Output folder (index.html, figures/, data/, results.json) [default: report]
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
     /// Shorter horizons and a coarser map (for a quick look and the tests)
     #[arg(long)]
     pub quick: bool,
-    /// Largest accepted normwise relative error of a term in the audit
-    #[arg(long, value_name = "REL", default_value_t = 1e-11)]
-    pub audit_tolerance: f64,
+    /// Largest accepted normwise relative error of a term in the audit [default: the audit's,
+    /// 1e-11]
+    #[arg(long, value_name = "REL")]
+    pub audit_tolerance: Option<f64>,
 }
 
 pub fn run(args: &ReportArgs, ctx: &Context) -> Result<Outcome> {
+    let defaults = ReportSettings::default();
+    let audit_tolerance = args.audit_tolerance.unwrap_or(defaults.audit_tolerance);
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(ReportSettings::DEFAULT_OUT));
     let settings = match &args.params {
         Some(p) => ReportSettings {
             params: ParamSource::File(p.clone()),
             segway_params: None,
             params_text: None,
             quick: args.quick,
-            audit_tolerance: args.audit_tolerance,
+            audit_tolerance,
         },
         None => ReportSettings {
             params: ctx.vehicle_defaults("vehicle8").unwrap_or_default(),
             segway_params: ctx.vehicle_defaults("segway7"),
             params_text: Some(ctx.paper_toml().to_string()),
             quick: args.quick,
-            audit_tolerance: args.audit_tolerance,
+            audit_tolerance,
         },
     };
     let bar = ctx.bar();
     let report = build(&settings, &bar)?;
     let files = report.files.0.len();
-    report.files.write(&args.out)?;
-    let index = args.out.join("index.html");
+    report.files.write(&out)?;
+    let index = out.join("index.html");
     ctx.say(format!(
         "wrote {files} files in {} ({:.1} s); open {}",
-        args.out.display(),
+        out.display(),
         report.results.wall_time_s,
         index.display()
     ));

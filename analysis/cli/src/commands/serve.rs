@@ -14,20 +14,22 @@ use crate::common::{Context, ModelArgs, Outcome, CANCEL};
 pub struct ServeArgs {
     #[command(flatten)]
     pub model: ModelArgs,
-    /// Port to listen on (0: any free port; the address is printed)
-    #[arg(long, value_name = "N", default_value_t = 8040)]
-    pub port: u16,
+    /// Port to listen on (0: any free port; the address is printed) [default: 8040]
+    #[arg(long, value_name = "N")]
+    pub port: Option<u16>,
     /// Address to listen on; anything but 127.0.0.1 lets other machines reach the page
-    #[arg(long, value_name = "ADDR", default_value = "127.0.0.1")]
-    pub bind: IpAddr,
+    /// [default: 127.0.0.1]
+    #[arg(long, value_name = "ADDR")]
+    pub bind: Option<IpAddr>,
 }
 
 pub fn run(args: &ServeArgs, ctx: &Context) -> Result<Outcome> {
     let model = args.model.resolve(ctx)?;
+    let defaults = ServeSettings::default();
     let settings = ServeSettings {
-        bind: args.bind,
-        port: args.port,
-        ..ServeSettings::default()
+        bind: args.bind.unwrap_or(defaults.bind),
+        port: args.port.unwrap_or(defaults.port),
+        ..defaults
     };
     let server = Server::bind(model, &settings)?;
     // The address first and flushed: scripts and tests that start the server read it.

@@ -15,3 +15,10 @@ pub mod baked {
     pub use twv_baked_other::*;
     pub use twv_baked_paper::*;
 }
+
+/// A path in the repository.
+pub fn repo(path: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(path)
+}
