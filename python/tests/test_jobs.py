@@ -161,7 +161,7 @@ def test_audit_of_a_hand_file(tmp_path):
     assert from_text.raw["disagreements"][0]["difference"] == "m2*b*sin(phi)*w_z^2"
     with pytest.raises(twv.InputError, match=r"hand file:\d+: \[Q\]: `v_y` is not one of"):
         twv.audit(model, hand_text=text.replace("[Q]", "[Q]\nv_y = 0"))
-    with pytest.raises(twv.InputError, match="not both"):
+    with pytest.raises(twv.InputError, match="cannot be given with"):
         twv.audit(model, hand=bad, hand_text=text)
 
 
@@ -254,6 +254,8 @@ def test_every_job_is_a_function_of_the_same_name_as_the_cli_subcommand():
         assert callable(getattr(twv, job["name"])), job["name"]
         assert f"  {job['name']} " in help_text, job["name"]
         for alias in job["aliases"]:
+            if alias == "margins":
+                continue  # twv.margins is the shortcut to linearize's margins
             assert getattr(twv, alias) is getattr(twv, job["name"]), alias
     assert twv.lyapunov_spectrum is twv.lyapunov and twv.steady_motion is twv.steady
 
@@ -287,7 +289,8 @@ def test_signatures_show_the_librarys_defaults():
             except twv.InputError as e:
                 # An option of a choice not taken (tracking_time without back-calculation,
                 # v_ref without the velocity loop) shows the default that choice gives.
-                assert ": needs " in str(e), (name, option["name"], str(e))
+                conditional = ": needs " in str(e) or "belongs to" in str(e)
+                assert conditional, (name, option["name"], str(e))
                 continue
             assert again == expected, (name, option["name"])
         for option in job["options"]:
@@ -335,11 +338,11 @@ def test_parameters_round_trip_in_both_vocabularies(vehicle8):
     # The stumble: Model("vehicle8", params=m.params) failed ("unknown parameter I1_xx").
     again = twv.Model("vehicle8", params=vehicle8.params)
     assert again.params == vehicle8.params
-    by_key = twv.Model("vehicle8", params={"I2": [0.9, 0.8, 0.04]})
-    by_name = twv.Model("vehicle8", params={"I2_xx": 0.9, "I2_yy": 0.8, "I2_zz": 0.04})
+    by_key = twv.Model("vehicle8", params={"I2": [0.9, 0.8, 0.2]})
+    by_name = twv.Model("vehicle8", params={"I2_xx": 0.9, "I2_yy": 0.8, "I2_zz": 0.2})
     assert by_key.params == by_name.params
     with pytest.raises(twv.InputError, match="twice"):
-        twv.Model("vehicle8", params={"I2": [0.9, 0.8, 0.04], "I2_yy": 0.8})
+        twv.Model("vehicle8", params={"I2": [0.9, 0.8, 0.2], "I2_yy": 0.8})
     assert vehicle8.units["m2"] == "kg" and vehicle8.units["phi"] == "rad"
     assert vehicle8.units["F1"] == "N"
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import inspect
 import json
 import math
+import os
 from concurrent.futures import Executor
 from typing import Any
 
@@ -42,7 +43,19 @@ def _plain(name: str, value: Any) -> Any:
         return [_plain(name, v) for v in value]
     if value is None or isinstance(value, bool | int | float | str):
         return value
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
     raise InputError(f"{name}: {type(value).__name__} is not a value twv takes")
+
+
+def _ordered(job: dict[str, Any], name: str, value: Any) -> Any:
+    """A dict for a repeatable option (`param={"m2": (4, 20, 17), "b": …}`) as its entries in
+    the order given (`["m2=4:20:17", …]`): their order is the axes' (a JSON object's is not
+    kept)."""
+    many = any(o["name"] == name and o["many"] for o in job["options"])
+    if many and isinstance(value, dict):
+        return [f"{k}={':'.join(str(x) for x in v)}" for k, v in value.items()]
+    return value
 
 
 def _check_model(model: Any) -> Model:
@@ -100,7 +113,7 @@ def _make(job: dict[str, Any]):
         given = _given(job, signature, args, kwargs)
         model = _check_model(given.pop("model"))
         settings = given.pop("settings", None)
-        options = {k: _plain(k, v) for k, v in given.items()}
+        options = {k: _plain(k, _ordered(job, k, v)) for k, v in given.items()}
         options_text = json.dumps(options)
         settings_text = None if settings is None else json.dumps(_plain("settings", settings))
         raw, csv, summary, negative = _native.run_options(

@@ -132,6 +132,9 @@ class _SeriesResult(Result):
         units = {"t": "s"}
         if self._model is not None:
             units |= self._model.units
+        given = self.raw.get("units") if isinstance(self.raw, dict) else None
+        if given and len(given) == len(self.columns):
+            units |= dict(zip(self.columns, given, strict=True))
         self.units = {c: units.get(c, "") for c in self.columns}
         """Each column's unit (SI; empty where the model gives none)."""
 

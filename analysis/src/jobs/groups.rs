@@ -257,6 +257,8 @@ pub fn optional<S: 'static>(f: fn(&mut S) -> &mut Option<ControllerSettings>) ->
 }
 
 /// A controller option: `set` on every controller, `get` from the first one.
+// Name, kind, unit, help, need, setter and getter: each call reads as one option's entry.
+#[allow(clippy::too_many_arguments)]
 fn controller_opt<S: Clone + 'static>(
     each: &Controllers<S>,
     name: &'static str,

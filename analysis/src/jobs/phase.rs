@@ -88,10 +88,15 @@ impl Job for Phase {
                     s.portraits = gain_sets(v)?
                         .into_iter()
                         .map(|g| {
-                            (
-                                format!("Kp {} Ki {} Kd {}", g.kp, g.ki, g.kd),
-                                Drive::Closed(ControllerSettings::pid(g)),
-                            )
+                            // A set of the study's Fig. 4 keeps its panel's name.
+                            let label = crate::control::scenario::STUDY_GAIN_SETS
+                                .iter()
+                                .find(|set| set.gains == g)
+                                .map_or_else(
+                                    || format!("Kp {} Ki {} Kd {}", g.kp, g.ki, g.kd),
+                                    |set| set.label.to_string(),
+                                );
+                            (label, Drive::Closed(ControllerSettings::pid(g)))
                         })
                         .collect();
                     Ok(())
