@@ -82,6 +82,9 @@ pub struct SimSettings {
     pub x0: Option<Vec<f64>>,
     /// Initial pitch when `x0` is `None` [rad]. Default 0.1.
     pub phi0: f64,
+    /// Initial pitch rate when `x0` is `None` [rad/s] (a push instead of, or beside, a tilt).
+    /// Default 0.
+    pub phi_dot0: f64,
 }
 
 impl Default for SimSettings {
@@ -94,6 +97,7 @@ impl Default for SimSettings {
             run: RunSettings::default(),
             x0: None,
             phi0: 0.1,
+            phi_dot0: 0.0,
         }
     }
 }
@@ -104,6 +108,12 @@ impl SimSettings {
         self.controller.validate()?;
         self.run.validate()?;
         crate::control::check_tilt("phi0", self.phi0)?;
+        if !self.phi_dot0.is_finite() {
+            return Err(crate::Error::input(
+                "phi_dot0",
+                format!("{} rad/s must be finite", self.phi_dot0),
+            ));
+        }
         if let Some(m) = &self.maneuver {
             m.profile()?;
         }
@@ -247,7 +257,16 @@ impl ControlTask for Sim<'_> {
         let info = model.info();
         let x0: [f64; NX] = match &s.x0 {
             Some(x) => state_vector("x0", x, info.states)?,
-            None => state_vector("x0", &resolved.rest_with("phi", s.phi0)?, info.states)?,
+            None => {
+                let mut x = resolved.rest_with("phi", s.phi0)?;
+                if s.phi_dot0 != 0.0 {
+                    let rate = resolved.state_index("w_y").ok_or_else(|| {
+                        crate::Error::input("phi_dot0", "the model has no pitch rate w_y")
+                    })?;
+                    x[rate] = s.phi_dot0;
+                }
+                state_vector("x0", &x, info.states)?
+            }
         };
         let plant: Plant<NU> = Plant::from_info(&info, &|n| resolved.param(n))?;
         let field = PidLoop::<_, NX, NU, NA>::new(model, &s.controller, plant)?;

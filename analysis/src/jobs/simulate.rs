@@ -98,6 +98,13 @@ impl Job for Simulate {
             )
             .aliases(&["phi0"])
             .conflicts(&["x0"]),
+            number(
+                "phi_dot0",
+                "rad/s",
+                "Initial pitch rate when x0 is not given (a push)",
+                field(|s: &mut SimSettings| &mut s.phi_dot0),
+            )
+            .conflicts(&["x0"]),
         ];
         opts.extend(controller(
             one(|s: &mut SimSettings| &mut s.controller),

@@ -218,3 +218,31 @@ fn the_json_runner_is_the_typed_job() {
     assert_eq!(bad.negative.as_deref(), Some("the pitch loop is unstable"));
 }
 
+
+/// `phi_dot0`: a push on the pitch rate from the upright is the same run as the whole initial
+/// state written out, bit for bit, and the study's PD recovers from it.
+#[test]
+fn a_push_on_the_pitch_rate_is_the_initial_state_it_names() {
+    let model = ModelSpec::shipped("vehicle8").resolve().unwrap();
+    let push = run_options(
+        "simulate",
+        &model,
+        None,
+        r#"{"tilt": 0, "phi_dot0": 0.3}"#,
+        &Silent,
+    );
+    let written = run_options(
+        "simulate",
+        &model,
+        None,
+        r#"{"x0": [0, 0, 0, 0, 0.3, 0, 0, 0]}"#,
+        &Silent,
+    );
+    let (push, written) = (push.unwrap(), written.unwrap());
+    assert_eq!(push.csv, written.csv);
+    let result: Value = serde_json::from_str(&push.result).unwrap();
+    assert_eq!(result["x0"][4], json!(0.3));
+    assert_eq!(result["recovery"], json!("recovered"));
+    let e = run_options("simulate", &model, None, r#"{"phi_dot0": "nan"}"#, &Silent);
+    assert!(e.unwrap_err().to_string().contains("phi_dot0"));
+}
