@@ -218,7 +218,6 @@ fn the_json_runner_is_the_typed_job() {
     assert_eq!(bad.negative.as_deref(), Some("the pitch loop is unstable"));
 }
 
-
 /// `phi_dot0`: a push on the pitch rate from the upright is the same run as the whole initial
 /// state written out, bit for bit, and the study's PD recovers from it.
 #[test]
