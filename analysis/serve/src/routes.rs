@@ -257,12 +257,6 @@ fn model_info(state: &State) -> Answer {
         description: &'a str,
     }
     #[derive(Serialize)]
-    struct Variable<'a> {
-        name: &'a str,
-        unit: &'a str,
-        description: &'a str,
-    }
-    #[derive(Serialize)]
     struct JobInfo {
         name: &'static str,
         aliases: &'static [&'static str],
@@ -270,14 +264,14 @@ fn model_info(state: &State) -> Answer {
         options: Vec<jobs::OptionInfo>,
     }
     #[derive(Serialize)]
-    struct Info<'a> {
+    struct Info<'a, V: Serialize> {
         model: &'a str,
         params_origin: &'a str,
         params: Vec<Param<'a>>,
         states: Vec<&'a str>,
         inputs: Vec<&'a str>,
-        state_info: Vec<Variable<'a>>,
-        input_info: Vec<Variable<'a>>,
+        state_info: &'a [V],
+        input_info: &'a [V],
         defaults: BTreeMap<&'static str, Value>,
         jobs: Vec<JobInfo>,
         limits: limits::Limits,
@@ -307,26 +301,8 @@ fn model_info(state: &State) -> Answer {
         params,
         states: model.states(),
         inputs: model.inputs(),
-        state_info: model
-            .ir
-            .states()
-            .iter()
-            .map(|v| Variable {
-                name: &v.name,
-                unit: &v.unit,
-                description: &v.description,
-            })
-            .collect(),
-        input_info: model
-            .ir
-            .inputs()
-            .iter()
-            .map(|v| Variable {
-                name: &v.name,
-                unit: &v.unit,
-                description: &v.description,
-            })
-            .collect(),
+        state_info: model.ir.states(),
+        input_info: model.ir.inputs(),
         defaults: served
             .iter()
             .map(|j| (j.name(), j.default_settings()))
