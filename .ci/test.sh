@@ -50,6 +50,7 @@ step "IR freshness (generated/ir is what the modeling code derives today)"
 
 step "cargo fmt --check"
 cargo fmt --all --check
+cargo fmt --manifest-path fuzz/Cargo.toml --check
 
 # One build of every target, linted: clippy-driver compiles the workspace crates with -D warnings
 # (the lints of `cargo clippy --workspace --all-targets -- -D warnings`, see .ci/clippy-rustc), so
@@ -113,6 +114,12 @@ step "docs: the book builds and every link resolves (in the background)"
 ( bash .ci/docs-test.sh >target/docs-test.log 2>&1 ) &
 docs_pid=$!
 
+# The fuzz targets, built with coverage instrumentation into target/fuzz/ (a build of their own),
+# a fixed number of runs each: beside the Python package too.
+step "fuzzing: every fuzz target, a fixed number of runs from its corpus (in the background)"
+( TWV_FUZZ_RUNS=100000 bash .ci/fuzz.sh >target/fuzz-test.log 2>&1 ) &
+fuzz_pid=$!
+
 step "python package: a release build of the extension into .venv (maturin), pytest python/tests"
 # --release: the package a user finds in .venv is the optimised one (a debug build ran a 20 x 20
 # map ~20 times slower than the CLI); its tests check that it is (TWV_EXPECT_PROFILE). --uv: the
@@ -131,6 +138,9 @@ finish "the Slurm cluster test" "$slurm_pid" target/slurm-test.log
 
 step "docs: the book and its links (its log)"
 finish "the docs test" "$docs_pid" target/docs-test.log
+
+step "fuzzing: no crash, hang or out-of-memory (its log)"
+finish "the fuzz test" "$fuzz_pid" target/fuzz-test.log
 
 step "aarch64 under qemu: the NEON lanes kernel has the one-point bits, twv the same bytes (its log)"
 finish "the aarch64 test" "$aarch64_pid" target/aarch64-test.log

@@ -101,6 +101,17 @@ pub enum Error {
 }
 
 impl Error {
+    /// Whether the run stopped because the caller cancelled it (whichever part noticed).
+    pub fn is_interrupted(&self) -> bool {
+        matches!(
+            self,
+            Error::Interrupted
+                | Error::Lyapunov(crate::lyapunov::LyapunovError::Interrupted)
+                | Error::Control(crate::control::ControlError::Interrupted)
+                | Error::Tune(crate::tune::TuneError::Interrupted)
+        )
+    }
+
     /// A bad setting or input.
     pub fn input(field: impl Into<String>, reason: impl Into<String>) -> Self {
         Error::Input {
@@ -108,6 +119,67 @@ impl Error {
             reason: reason.into(),
         }
     }
+}
+
+/// `text` with every decimal number longer than [`LONGEST_NUMBER`] characters (Rust prints
+/// 1e300 as 301 digits) rewritten in scientific notation, for messages people read.
+pub fn readable_numbers(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find(|c: char| c.is_ascii_digit()) {
+        out.push_str(&rest[..start]);
+        let tail = &rest[start..];
+        let int_len = tail
+            .find(|c: char| !c.is_ascii_digit())
+            .unwrap_or(tail.len());
+        let mut end = int_len;
+        if tail[int_len..].starts_with('.') {
+            let fraction = &tail[int_len + 1..];
+            let digits = fraction
+                .find(|c: char| !c.is_ascii_digit())
+                .unwrap_or(fraction.len());
+            if digits > 0 {
+                end = int_len + 1 + digits;
+            }
+        }
+        let number = &tail[..end];
+        match number.parse::<f64>() {
+            Ok(v) if number.len() > LONGEST_NUMBER => out.push_str(&format!("{v:e}")),
+            _ => out.push_str(number),
+        }
+        rest = &tail[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Numbers in messages longer than this are shortened by [`readable_numbers`].
+pub const LONGEST_NUMBER: usize = 24;
+
+/// `text` for a message of one line: numbers readable ([`readable_numbers`]) and control
+/// characters (a newline in a field name a request sent) escaped as `\n`, so that a message
+/// can never be more than one line nor carry a terminal's control sequences.
+pub fn readable(text: &str) -> String {
+    let mut escaped = String::with_capacity(text.len());
+    for c in text.chars() {
+        if c.is_control() {
+            escaped.extend(c.escape_default());
+        } else {
+            escaped.push(c);
+        }
+    }
+    readable_numbers(&escaped)
+}
+
+/// An error and its causes on one line, numbers readable: what every front end shows.
+pub fn one_line(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        text = format!("{text}: {s}");
+        source = s.source();
+    }
+    readable(&text)
 }
 
 /// The library's result type.

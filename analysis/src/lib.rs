@@ -24,7 +24,7 @@
 pub mod api;
 pub mod audit;
 pub mod control;
-mod error;
+pub mod error;
 pub mod hand_file;
 pub mod hand_model;
 pub mod integrate;

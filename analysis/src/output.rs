@@ -61,32 +61,98 @@ impl Files {
     /// all or nothing: after a failure nothing of this call is left. Files that an earlier
     /// write into `dir` made and this one does not (a figure of a state that no longer moves)
     /// are removed, so a reused folder never mixes two runs; `dir`'s other files are left
-    /// alone (the names written are kept in `dir/.twv-files`).
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, OutputError> {
+    /// alone. What was written is recorded in `dir/.twv-files` with each file's SHA-256, and a
+    /// stale file is removed only while it is still a regular file inside `dir` (no symbolic
+    /// link on the way) with the bytes twv wrote: a file the user changed, added to the list or
+    /// linked elsewhere is left where it is, with a note in [`Written::left`].
+    pub fn write(&self, dir: &Path) -> Result<Written, OutputError> {
         let manifest = dir.join(MANIFEST);
-        let previous = fs::read_to_string(&manifest).unwrap_or_default();
+        let previous = match fs::symlink_metadata(&manifest) {
+            Ok(meta) if meta.is_file() => fs::read_to_string(&manifest).unwrap_or_default(),
+            _ => String::new(),
+        };
         let mut out = OutputDir::create(dir)?;
         for (name, bytes) in &self.0 {
             out.write(name, bytes)?;
         }
-        let names = self.names().join("\n") + "\n";
-        write_atomic(&manifest, names.as_bytes())?;
-        let written = out.commit();
+        let listed: String = self
+            .0
+            .iter()
+            .map(|(name, bytes)| format!("{}  {name}\n", sha256_hex(bytes)))
+            .collect();
+        write_atomic(&manifest, listed.as_bytes())?;
+        let files = out.commit();
         let current: std::collections::HashSet<&str> = self.names().into_iter().collect();
-        for stale in previous
-            .lines()
-            .filter(|n| !n.is_empty() && !current.contains(n))
-        {
-            // Only plain relative names this writer made; never climb out of `dir`.
-            if !stale.contains("..") && !Path::new(stale).is_absolute() {
-                let _ = fs::remove_file(dir.join(stale));
+        let mut left = Vec::new();
+        for line in previous.lines().filter(|l| !l.trim().is_empty()) {
+            let (hash, name) = line.split_once("  ").unwrap_or(("", line));
+            if current.contains(name) {
+                continue;
+            }
+            if let Err(why) = remove_own(dir, name, hash) {
+                left.push(format!("left {} in place: {why}", dir.join(name).display()));
             }
         }
-        Ok(written)
+        Ok(Written { files, left })
     }
 }
 
-/// The list of files the last [`Files::write`] put into a folder.
+/// What [`Files::write`] did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Written {
+    /// The files written, in order.
+    pub files: Vec<PathBuf>,
+    /// Files of an earlier run that were not removed, each with the reason (one line each).
+    pub left: Vec<String>,
+}
+
+/// SHA-256 of `bytes` in hex (the manifest's record of what twv wrote).
+fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::Digest;
+    sha2::Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// Removes `dir/name` if it is what twv wrote there (`hash`): a relative name of plain
+/// components, no symbolic link on the way or at the end, a regular file with those bytes.
+fn remove_own(dir: &Path, name: &str, hash: &str) -> Result<(), &'static str> {
+    use std::path::Component;
+    let relative = Path::new(name);
+    if name.is_empty()
+        || !relative
+            .components()
+            .all(|c| matches!(c, Component::Normal(_)))
+    {
+        return Err("its name in .twv-files is not a plain name inside the folder");
+    }
+    if hash.len() != 64 {
+        return Err("its entry in .twv-files has no content hash (an older twv, or not twv's)");
+    }
+    let mut path = dir.to_path_buf();
+    let components: Vec<_> = relative.components().collect();
+    for (i, part) in components.iter().enumerate() {
+        path.push(part);
+        let Ok(meta) = fs::symlink_metadata(&path) else {
+            return Err("it is gone");
+        };
+        if meta.file_type().is_symlink() {
+            return Err("a symbolic link is on its path (twv never follows one to remove a file)");
+        }
+        let last = i + 1 == components.len();
+        if last && !meta.is_file() {
+            return Err("it is not a regular file");
+        }
+    }
+    let bytes = fs::read(&path).map_err(|_| "it cannot be read")?;
+    if sha256_hex(&bytes) != hash {
+        return Err("it changed since twv wrote it");
+    }
+    fs::remove_file(&path).map_err(|_| "it cannot be removed")
+}
+
+/// The list of files the last [`Files::write`] put into a folder, with their SHA-256.
 const MANIFEST: &str = ".twv-files";
 
 /// A folder receiving the files of one run.
@@ -131,8 +197,24 @@ impl OutputDir {
 
     /// Write `name` (which may name a subfolder, `figures/a.svg`) atomically (temporary file
     /// + rename) and remember it.
+    ///
+    /// A subfolder on the way that is a symbolic link is refused: twv writes only into real
+    /// folders inside the output folder.
     pub fn write(&mut self, name: &str, bytes: &[u8]) -> Result<PathBuf, OutputError> {
         let path = self.dir.join(name);
+        let mut inside = self.dir.clone();
+        for part in Path::new(name).components() {
+            inside.push(part);
+            if fs::symlink_metadata(&inside).is_ok_and(|m| m.file_type().is_symlink()) {
+                return Err(OutputError::Io {
+                    path: inside.clone(),
+                    source: std::io::Error::other(
+                        "it is a symbolic link; twv writes only into real folders inside the \
+                         output folder",
+                    ),
+                });
+            }
+        }
         if let Some(parent) = path.parent() {
             if !parent.exists() {
                 fs::create_dir_all(parent).map_err(|source| OutputError::Io {
@@ -171,8 +253,38 @@ impl Drop for OutputDir {
     }
 }
 
+/// Atomic writes under way in this process: a front end that exits at once on a second Ctrl-C
+/// waits for this to be 0 first ([`writes_in_flight`]), so that an interrupt during a
+/// checkpoint's write cannot leave a temporary file and no checkpoint.
+static WRITES_IN_FLIGHT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// How many [`write_atomic`] calls are between their first byte and their rename.
+pub fn writes_in_flight() -> usize {
+    WRITES_IN_FLIGHT.load(std::sync::atomic::Ordering::SeqCst)
+}
+
+/// Counts one write in flight while it lives: a file being written, or a run that ends in a
+/// write once cancelled (a sweep's shard, whose checkpoint follows the chunk it finishes).
+pub struct InFlight;
+
+impl InFlight {
+    /// Counts from now until dropped.
+    #[allow(clippy::new_without_default)]
+    pub fn new() -> Self {
+        WRITES_IN_FLIGHT.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        InFlight
+    }
+}
+
+impl Drop for InFlight {
+    fn drop(&mut self) {
+        WRITES_IN_FLIGHT.fetch_sub(1, std::sync::atomic::Ordering::SeqCst);
+    }
+}
+
 /// Write a file via a temporary sibling and a rename, so readers never see half a file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let _in_flight = InFlight::new();
     let io = |source| OutputError::Io {
         path: path.to_path_buf(),
         source,

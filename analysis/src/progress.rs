@@ -24,6 +24,17 @@ pub struct Silent;
 
 impl Progress for Silent {}
 
+/// A part of a larger job: it hears the whole job's cancellation but reports no progress of its
+/// own (the whole job counts its parts).
+#[derive(Clone, Copy)]
+pub struct CancelOnly<'a>(pub &'a dyn Progress);
+
+impl Progress for CancelOnly<'_> {
+    fn cancelled(&self) -> bool {
+        self.0.cancelled()
+    }
+}
+
 /// A cancellation flag another thread (a signal handler) can raise.
 #[derive(Debug, Default)]
 pub struct CancelFlag(AtomicBool);

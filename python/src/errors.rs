@@ -34,12 +34,7 @@ create_exception!(
 /// The Python exception for a twv error.
 pub fn to_py(e: Error) -> PyErr {
     // The whole chain, as the CLI prints it ("invalid Lyapunov settings: h = -1 …").
-    let mut text = e.to_string();
-    let mut source = std::error::Error::source(&e);
-    while let Some(s) = source {
-        text = format!("{text}: {s}");
-        source = s.source();
-    }
+    let text = twv_analysis::error::one_line(&e);
     match e {
         Error::Interrupted => PyKeyboardInterrupt::new_err(text),
         Error::Input { .. }

@@ -84,12 +84,13 @@ fn interruptible<T: Send>(
         }
         py.detach(|| worker.join())
     });
-    match outcome {
-        Ok(result) => match (result, interrupt) {
-            (Err(twv_analysis::Error::Interrupted), Some(e)) => Err(e),
-            (result, _) => result.map_err(to_py),
-        },
-        Err(panic) => Err(errors::panicked(panic)),
+    match (outcome, interrupt) {
+        // Ctrl-C is KeyboardInterrupt whatever the job made of it (an interrupted
+        // integration's error, or a result it finished anyway): never a ValueError that an
+        // `except ValueError` would swallow.
+        (_, Some(e)) => Err(e),
+        (Ok(result), None) => result.map_err(to_py),
+        (Err(panic), None) => Err(errors::panicked(panic)),
     }
 }
 

@@ -29,15 +29,25 @@ pub enum Outcome {
 pub static CANCEL: CancelFlag = CancelFlag::new();
 
 /// The first interrupt asks the running job to stop cleanly (a sweep then writes its
-/// checkpoint); a second one exits at once.
+/// checkpoint); a second one exits at once, except that a file being written (a checkpoint) is
+/// finished and renamed into place first (at most [`LAST_WRITE_WAIT`]).
 pub fn install_interrupt_handler() {
     let _ = ctrlc::set_handler(|| {
         if CANCEL.is_raised() {
+            let started = std::time::Instant::now();
+            while twv_analysis::output::writes_in_flight() > 0
+                && started.elapsed() < LAST_WRITE_WAIT
+            {
+                std::thread::sleep(std::time::Duration::from_millis(5));
+            }
             std::process::exit(130);
         }
         CANCEL.raise();
     });
 }
+
+/// The longest a second Ctrl-C waits for a file being written.
+const LAST_WRITE_WAIT: std::time::Duration = std::time::Duration::from_secs(10);
 
 /// What every command may need besides its arguments.
 pub struct Context {
@@ -81,11 +91,24 @@ impl Context {
 }
 
 /// The one-line message for an error: a bad setting names the command-line option.
-pub fn describe(err: &anyhow::Error) -> String {
+///
+/// The library names the settings field; for the job `command` that is the flag of the option
+/// with that name or alias (`repeat` is `--runs`), and a field that no flag sets (a settings
+/// file's) is named as the settings field it is, never as a flag that does not exist.
+pub fn describe(err: &anyhow::Error, command: &str) -> String {
     if let Some(twv_analysis::Error::Input { field, reason }) = err.downcast_ref() {
-        return format!("--{}: {reason}", crate::job::flag_name(field));
+        let options = twv_analysis::jobs::find(command).map_or(Vec::new(), |j| j.options());
+        let option = options
+            .iter()
+            .find(|o| o.name == field || o.aliases.contains(&field.as_str()));
+        let line = match option {
+            Some(o) => format!("--{}: {reason}", crate::job::flag_name(o.name)),
+            None if options.is_empty() => format!("{field}: {reason}"),
+            None => format!("settings field `{field}`: {reason}"),
+        };
+        return twv_analysis::error::readable(&line);
     }
-    format!("{err:#}")
+    twv_analysis::error::readable(&format!("{err:#}"))
 }
 
 /// Which model to run and with which parameters.
@@ -171,8 +194,12 @@ impl ModelArgs {
 
 /// Writes `files` into `dir` (atomically, all or nothing) and names them on stderr.
 pub fn write_files(ctx: &Context, dir: &Path, files: &Files) -> Result<()> {
-    for path in files.write(dir)? {
+    let written = files.write(dir)?;
+    for path in &written.files {
         ctx.say(format!("wrote {}", path.display()));
+    }
+    for note in &written.left {
+        ctx.say(format!("note: {note}"));
     }
     Ok(())
 }

@@ -63,7 +63,7 @@ fn main() -> ExitCode {
             ExitCode::from(130)
         }
         Err(err) => {
-            eprintln!("twv: error: {}", common::describe(&err));
+            eprintln!("twv: error: {}", common::describe(&err, name));
             ExitCode::from(1)
         }
     }

@@ -76,7 +76,7 @@ fn absurd_steps_are_refused_up_front() {
         ],
         SECONDS,
     );
-    fails_with(&out, &["--grid", "1000000000000 points"]);
+    fails_with(&out, &["settings field `grid`", "1000000000000 points"]);
     assert!(!dir.exists(), "no folder left behind");
 }
 
@@ -334,4 +334,90 @@ fn every_command_takes_quiet_and_prints_no_progress_off_a_terminal() {
         let out = twv(&[cmd, "--quiet", "--help"]);
         assert!(out.status.success(), "{cmd} --quiet");
     }
+}
+
+/// One Ctrl-C stops any long command within a second, exit 130, nothing half-written (issue 38:
+/// a 10⁵-speed `steady`, a `tune` of thousands of subproblems and the `report` used to run on).
+#[test]
+fn one_ctrl_c_stops_every_long_command_within_a_second() {
+    let base = scratch("ctrl-c");
+    let report = base.join("report");
+    let heavy_tune = base.join("tune.json");
+    std::fs::write(
+        &heavy_tune,
+        r#"{"options": {"points_per_decade": 2000, "max_iterations": 5000}, "spec": "dpm>=89.9,dgm>=60dB"}"#,
+    )
+    .unwrap();
+    let cases: [&[&str]; 4] = [
+        &["steady", "--model", "whipple", "--speed", "0:9.9:0.0001"],
+        &["tune", "--settings", heavy_tune.to_str().unwrap()],
+        &["report", "--out", report.to_str().unwrap()],
+        &["sim", "--t-end", "1000", "--h", "1e-5"],
+    ];
+    for args in cases {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_twv"))
+            .args(args)
+            .arg("--quiet")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(1500));
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "{args:?} ended too soon to be interrupted"
+        );
+        let sent = Instant::now();
+        let pid = child.id().to_string();
+        assert!(Command::new("kill")
+            .args(["-INT", &pid])
+            .status()
+            .unwrap()
+            .success());
+        let out = loop {
+            if child.try_wait().unwrap().is_some() {
+                break child.wait_with_output().unwrap();
+            }
+            if sent.elapsed() > Duration::from_secs(10) {
+                let _ = child.kill();
+                panic!("{args:?} still running 10 s after Ctrl-C");
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        let took = sent.elapsed();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(130), "{args:?}: {stderr}");
+        assert!(stderr.contains("interrupted"), "{args:?}: {stderr}");
+        assert!(
+            took < Duration::from_secs(1),
+            "{args:?} took {took:?} after Ctrl-C"
+        );
+    }
+    assert!(!report.exists(), "an interrupted report writes nothing");
+}
+
+/// Messages name options that exist (the canonical flag, not an alias or a settings field
+/// dressed as a flag) and print numbers a person can read (issue 38).
+#[test]
+fn messages_name_real_options_and_readable_numbers() {
+    let out = bounded(&["lyap", "--x0", X8, "--repeat", "0"], SECONDS);
+    let stderr = fails_with(&out, &["--timing"]);
+    assert!(!stderr.contains("--repeat"), "{stderr}");
+    // --phi0 is an alias of sim's --tilt.
+    let out = bounded(&["sim", "--phi0", "1e300"], SECONDS);
+    let stderr = fails_with(&out, &["--tilt", "1e300"]);
+    assert!(stderr.len() < 300, "{stderr}");
+    assert!(!stderr.contains("000000000000000000000000"), "{stderr}");
+    let out = bounded(&["tune", "--tilt", "1e300"], SECONDS);
+    let stderr = fails_with(&out, &["--tilt", "1e300"]);
+    assert!(!stderr.contains("--phi0"), "{stderr}");
+    // A field the settings file sets and no flag does is named as the field it is.
+    let dir = scratch("messages");
+    let file = dir.join("tune.json");
+    std::fs::write(&file, r#"{"options": {"points_per_decade": 1}}"#).unwrap();
+    let out = bounded(&["tune", "--settings", file.to_str().unwrap()], SECONDS);
+    fails_with(
+        &out,
+        &["settings field `points_per_decade`", "between 2 and 10000"],
+    );
 }

@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
-use twv_analysis::api::Silent;
+use twv_analysis::api::{Progress, Silent};
 use twv_analysis::jobs::{self, AnyJob};
 use twv_analysis::model::ResolvedModel;
 
@@ -87,8 +87,27 @@ impl Reply {
     }
 }
 
-/// Answers one request.
+/// Answers one request (a job never cancelled).
 pub fn respond(state: &State, method: &str, url: &str, body: &[u8]) -> Reply {
+    respond_with(state, method, url, body, &Silent)
+}
+
+/// Whether the request runs a job (`POST /api/<job>` of a served job): the server queues
+/// these for its job threads and answers everything else at once.
+pub fn is_job(method: &str, url: &str) -> bool {
+    let path = url.split(['?', '#']).next().unwrap_or("");
+    method == "POST" && path.strip_prefix("/api/").and_then(served).is_some()
+}
+
+/// Answers one request; a job looks at `progress` for a cancellation, and a cancelled job
+/// answers 503.
+pub fn respond_with(
+    state: &State,
+    method: &str,
+    url: &str,
+    body: &[u8],
+    progress: &dyn Progress,
+) -> Reply {
     let path = url.split(['?', '#']).next().unwrap_or("");
     if let Some(asset) = assets::get(path) {
         return match method {
@@ -113,7 +132,7 @@ pub fn respond(state: &State, method: &str, url: &str, body: &[u8]) -> Reply {
         if method != "POST" {
             return not_allowed(method, path, "POST");
         }
-        run_job(state, job, body)
+        run_job(state, job, body, progress)
     };
     match answer {
         Ok((result, series)) => {
@@ -216,14 +235,23 @@ fn request<'a>(state: &'a State, body: &[u8]) -> Result<(Cow<'a, ResolvedModel>,
 }
 
 fn failed(e: twv_analysis::Error) -> Reply {
+    if e.is_interrupted() {
+        return Reply::error(503, "the job was cancelled".into());
+    }
+    let text = twv_analysis::error::one_line(&e);
     match e {
-        twv_analysis::Error::Input { .. } => Reply::error(422, format!("settings: {e}")),
-        other => Reply::error(422, other.to_string()),
+        twv_analysis::Error::Input { .. } => Reply::error(422, format!("settings: {text}")),
+        _ => Reply::error(422, text),
     }
 }
 
 /// Runs `job` as the body asks, within the server's limits.
-fn run_job(state: &State, job: &'static dyn AnyJob, body: &[u8]) -> Answer {
+fn run_job(
+    state: &State,
+    job: &'static dyn AnyJob,
+    body: &[u8],
+    progress: &dyn Progress,
+) -> Answer {
     let (model, r) = request(state, body)?;
     let options: Vec<(String, Value)> = r.options.into_iter().collect();
     let prepared = if options.is_empty() {
@@ -238,7 +266,7 @@ fn run_job(state: &State, job: &'static dyn AnyJob, body: &[u8]) -> Answer {
     .map_err(failed)?;
     let budget = prepared.budget(&model).map_err(failed)?;
     limits::check(&budget).map_err(|why| Reply::error(413, why))?;
-    let done = prepared.run(&model, &Silent).map_err(failed)?;
+    let done = prepared.run(&model, progress).map_err(failed)?;
     let result = to_json(&done.value().map_err(failed)?)?;
     let series = done.series().map(|s| s.to_string());
     Ok((result, series))

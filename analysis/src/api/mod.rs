@@ -59,4 +59,6 @@ pub use sweep::{
     compute_points, run_shard, status_counts, sweep, Computed, ShardOptions, ShardOutcome,
     SweepSettings, MAX_POINTS,
 };
-pub use tune::{tilt_check, tune_model, TiltCheck, TuneReport, TuneSettings, TuneVerdict};
+pub use tune::{
+    tilt_check, tune_model, tune_model_with, TiltCheck, TuneReport, TuneSettings, TuneVerdict,
+};

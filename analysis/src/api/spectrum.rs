@@ -299,11 +299,16 @@ impl SpectrumResult {
             self.model, r.t_total, self.params
         );
         for (i, ((l, e), d)) in r.exponents.iter().zip(&r.stderr).zip(&r.signs).enumerate() {
+            // Fewer than two batches have no spread: the error is unknown, not a number.
+            let error = if e.is_nan() {
+                "(no error: fewer than two batches)".to_string()
+            } else {
+                format!("± {e:.6} 1/s (1σ)")
+            };
             s += &format!(
-                "  λ{:<2} = {:+.6} ± {:.6} 1/s (1σ)  {:?}: {}\n",
+                "  λ{:<2} = {:+.6} {error}  {:?}: {}\n",
                 i + 1,
                 l,
-                e,
                 d.sign,
                 d.test
             );

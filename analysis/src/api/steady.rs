@@ -13,9 +13,14 @@ use crate::error::{Error, Result};
 use crate::model::ResolvedModel;
 use crate::output::Files;
 use crate::plot::{Curve, Figure, LineChart};
+use crate::progress::Progress;
 
 /// The most speeds one sweep evaluates.
-pub const MAX_SPEEDS: usize = 1_000_000;
+pub const MAX_SPEEDS: usize = 100_000;
+
+/// Speeds between progress reports (and looks at the cancel flag): about 0.1 s of the bicycle
+/// on the interpreter.
+const PROGRESS_CHUNK: usize = 500;
 
 /// Settings of a speed sweep, defaults beside each field.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -315,14 +320,28 @@ fn crossing(
 }
 
 /// The eigenvalues of the studied modes against speed, and the self-stable ranges.
-pub fn steady_motion(model: &ResolvedModel, settings: &SteadySettings) -> Result<SteadyResult> {
+///
+/// `progress` hears of every [`PROGRESS_CHUNK`] speeds, and a cancellation stops the run there.
+pub fn steady_motion(
+    model: &ResolvedModel,
+    settings: &SteadySettings,
+    progress: &dyn Progress,
+) -> Result<SteadyResult> {
     settings.validate()?;
     let motion = Motion::of(model)?;
     let mut work = Vec::new();
-    let points = settings
-        .speeds()
+    let speeds = settings.speeds();
+    progress.start(speeds.len() as u64, "speeds");
+    let points = speeds
         .into_iter()
-        .map(|v| {
+        .enumerate()
+        .map(|(k, v)| {
+            if k % PROGRESS_CHUNK == PROGRESS_CHUNK - 1 {
+                progress.advance(PROGRESS_CHUNK as u64);
+                if progress.cancelled() {
+                    return Err(Error::Interrupted);
+                }
+            }
             let eigenvalues = motion.eigenvalues(v, &mut work)?;
             Ok(SpeedPoint {
                 speed: v,

@@ -680,6 +680,9 @@ fn run_shard_in(
     done.dedup_by_key(|p| p.index);
     let resumed = done.len();
     let todo = missing(range.clone(), &done);
+    // From here to the checkpoint's rename a second Ctrl-C waits (see output::InFlight): once
+    // cancelled, the chunk under way ends and the checkpoint is written, or all is lost.
+    let _checkpoint = crate::output::InFlight::new();
     let computed = compute_points(model, settings, config, &todo, progress)?;
     let complete = computed.complete;
     done.extend(computed.points);

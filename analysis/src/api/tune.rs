@@ -10,7 +10,8 @@ use crate::control::{ControllerSettings, RunSettings};
 use crate::error::Result;
 use crate::linear::{linearize, OperatingPoint, PidGains};
 use crate::model::{dispatch, ModelTask, ResolvedModel};
-use crate::tune::{tune, Spec, TuneOptions, TuneResult, TuneStatus};
+use crate::progress::Progress;
+use crate::tune::{tune_with, Spec, TuneOptions, TuneResult, TuneStatus};
 
 /// What to tune. Defaults: `dpm>=45`, a PD with the smallest gains that meet it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -128,7 +129,7 @@ pub fn tilt_check(model: &ResolvedModel, gains: &PidGains, tilt: f64) -> Result<
     })
 }
 
-struct Fit<'a>(&'a TuneSettings);
+struct Fit<'a>(&'a TuneSettings, &'a dyn Progress);
 
 impl ModelTask for Fit<'_> {
     type Output = TuneResult;
@@ -143,19 +144,28 @@ impl ModelTask for Fit<'_> {
             effort_tilt: self.0.tilt,
             ..self.0.options
         };
-        Ok(tune(&lp, &self.0.spec, &options)?)
+        Ok(tune_with(&lp, &self.0.spec, &options, self.1)?)
     }
 }
 
 /// Tunes the pitch loop of `model` and checks the gains on the nonlinear model.
 pub fn tune_model(model: &ResolvedModel, settings: &TuneSettings) -> Result<TuneReport> {
+    tune_model_with(model, settings, &crate::progress::Silent)
+}
+
+/// [`tune_model`], stopping at the next subproblem when `progress` says it is cancelled.
+pub fn tune_model_with(
+    model: &ResolvedModel,
+    settings: &TuneSettings,
+    progress: &dyn Progress,
+) -> Result<TuneReport> {
     if !(settings.tilt.is_finite() && settings.tilt > 0.0) {
         return Err(crate::error::Error::input(
             "tilt",
             format!("{} must be a finite angle > 0 rad", settings.tilt),
         ));
     }
-    let result = dispatch(model, Fit(settings))?;
+    let result = dispatch(model, Fit(settings, progress))?;
     let tilt = match &result.certificate {
         Some(c) if c.analysis.closed_loop.stable => {
             Some(tilt_check(model, &c.gains, settings.tilt)?)
@@ -181,6 +191,14 @@ impl TuneReport {
             self.params,
             res.spec,
             match self.verdict {
+                TuneVerdict::Met if res.status == TuneStatus::IterationLimit => format!(
+                    "margins met, but the objective had not converged when the tuner stopped \
+                     at its limit of {} subproblems: these are the last gains that met the \
+                     specification, not an optimum (an objective without a bound, such as \
+                     max-proportional without a force<= requirement, grows the gains until the \
+                     limit)",
+                    res.iterations
+                ),
                 TuneVerdict::Met => format!(
                     "met ({:?} after {} subproblems)",
                     res.status, res.iterations

@@ -89,8 +89,16 @@ pub struct Disagreement {
     /// The largest relative error at the given parameter values alone: ≤ the tolerance means
     /// the entry holds for this vehicle's values but not as a formula.
     pub max_rel_at_given_params: f64,
-    /// hand − derived, simplified (see `normal`), when the entry has a formula on both sides.
+    /// hand − derived, simplified (see `normal`), when the entry has a formula on both sides
+    /// and is finite (the difference of a NaN entry may well simplify to 0).
     pub difference: Option<String>,
+    /// `"hand"` or `"derived"` when that side's value is NaN or infinite at the worst sample.
+    pub non_finite: Option<&'static str>,
+}
+
+/// Which model a side of the comparison (`audited`, `reference`) is in a hand audit.
+pub(super) fn side_name(side: Option<&'static str>) -> Option<&'static str> {
+    side.map(|s| if s == "audited" { "hand" } else { "derived" })
 }
 
 /// Everything an audit of a hand file found.
@@ -404,10 +412,11 @@ pub fn audit_hand_model(
                 u: named(&inputs, u),
                 params: worst_params,
                 max_rel_at_given_params: given.entries[index].max_rel,
-                difference: match (hand_entry, function) {
-                    (Some(e), Some(f)) => difference(&e.expr, f, index, &names, &mut forms),
+                difference: match (hand_entry, function, entry.non_finite) {
+                    (Some(e), Some(f), None) => difference(&e.expr, f, index, &names, &mut forms),
                     _ => None,
                 },
+                non_finite: side_name(entry.non_finite),
             });
         }
     }
@@ -470,10 +479,13 @@ impl Disagreement {
             n => format!(" (line {n})"),
         };
         let at = if self.x.is_empty() { "" } else { " at " };
+        let what = match self.non_finite {
+            Some(side) => format!("the {side} value is not finite (NaN or infinite)"),
+            None => format!("relative error {:.3e}", self.max_rel),
+        };
         let mut text = format!(
-            "{}{line}: relative error {:.3e}{at}{}{}{}",
+            "{}{line}: {what}{at}{}{}{}",
             self.label,
-            self.max_rel,
             format_named(&self.x),
             if self.u.is_empty() { "" } else { "; " },
             format_named(&self.u)

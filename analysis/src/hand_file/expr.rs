@@ -60,6 +60,8 @@ impl Func {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Expr {
     Num(f64),
+    /// π, kept as itself so that the simplifier knows `sin(pi - phi)` is `sin(phi)` exactly.
+    Pi,
     Var(Var),
     Neg(Box<Expr>),
     Add(Box<Expr>, Box<Expr>),
@@ -85,6 +87,19 @@ impl Expr {
         Expr::Mul(Box::new(a), Box::new(b))
     }
 
+    /// The operands of an operation (none for a number or a name).
+    pub fn children(&self) -> [Option<&Expr>; 2] {
+        match self {
+            Expr::Num(_) | Expr::Pi | Expr::Var(_) => [None, None],
+            Expr::Neg(a) | Expr::Call(_, a) => [Some(a), None],
+            Expr::Add(a, b)
+            | Expr::Sub(a, b)
+            | Expr::Mul(a, b)
+            | Expr::Div(a, b)
+            | Expr::Pow(a, b) => [Some(a), Some(b)],
+        }
+    }
+
     /// The exponent as a small integer, when it is a constant one (`x^2`, `x^-1`, `x^(3^2)`).
     pub fn small_integer(&self) -> Option<i32> {
         let v = self.constant()?;
@@ -103,7 +118,7 @@ impl Expr {
 
     fn has_no_names(&self) -> bool {
         match self {
-            Expr::Num(_) => true,
+            Expr::Num(_) | Expr::Pi => true,
             Expr::Var(_) | Expr::Call(Func::Other(_), _) => false,
             Expr::Neg(a) | Expr::Call(_, a) => a.has_no_names(),
             Expr::Add(a, b)
@@ -118,6 +133,7 @@ impl Expr {
     pub fn eval<S: Real>(&self, args: &Args<'_, S>) -> S {
         match self {
             Expr::Num(v) => S::cst(*v),
+            Expr::Pi => S::cst(std::f64::consts::PI),
             Expr::Var(Var::X(i)) => args.x[*i],
             Expr::Var(Var::U(i)) => args.u[*i],
             Expr::Var(Var::P(i)) => S::cst(args.p[*i]),

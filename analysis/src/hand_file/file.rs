@@ -123,15 +123,41 @@ struct LinearTables {
     k2: Option<Matrix>,
 }
 
+impl Formula {
+    /// The formula as text (a plain number as it reads).
+    fn text(&self) -> String {
+        match self {
+            Formula::Text(t) => t.clone(),
+            Formula::Integer(i) => i.to_string(),
+            Formula::Float(f) => f.to_string(),
+        }
+    }
+}
+
 /// Where offsets of the file are.
 struct Source<'a> {
     text: &'a str,
     origin: &'a str,
     /// The model's names, appended to an unknown-name error.
     names: String,
+    /// The byte offset where each line starts (a line is found by bisection: a file of many
+    /// formulas must not be scanned once per formula).
+    line_starts: Vec<usize>,
 }
 
-impl Source<'_> {
+impl<'a> Source<'a> {
+    fn new(text: &'a str, origin: &'a str, names: String) -> Self {
+        let line_starts = std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+            .collect();
+        Self {
+            text,
+            origin,
+            names,
+            line_starts,
+        }
+    }
+
     fn toml_error(&self, e: &toml::de::Error) -> HandFileError {
         HandFileError {
             file: self.origin.to_string(),
@@ -140,11 +166,17 @@ impl Source<'_> {
         }
     }
 
+    /// The 1-based line of byte `offset`.
     fn line(&self, offset: usize) -> usize {
-        self.text[..offset.min(self.text.len())]
-            .matches('\n')
-            .count()
-            + 1
+        self.line_starts.partition_point(|&start| start <= offset)
+    }
+
+    /// The 0-based column of byte `offset` on its line, in characters.
+    fn column(&self, offset: usize) -> usize {
+        let start = self.line_starts[self.line(offset) - 1];
+        self.text
+            .get(start..offset)
+            .map_or(0, |before| before.chars().count())
     }
 
     fn error(&self, offset: usize, message: impl Into<String>) -> HandFileError {
@@ -164,11 +196,7 @@ impl Source<'_> {
     ) -> Result<Entry, HandFileError> {
         let start = value.span().start;
         let line = self.line(start);
-        let text = match value.get_ref() {
-            Formula::Text(t) => t.clone(),
-            Formula::Integer(i) => i.to_string(),
-            Formula::Float(f) => f.to_string(),
-        };
+        let text = value.get_ref().text();
         parse(&text, scope)
             .map(|expr| Entry { expr, line })
             .map_err(
@@ -180,7 +208,7 @@ impl Source<'_> {
                         message = format!("{message}; the model's names: {}", self.names);
                     }
                     // The formula starts one character after its opening quote.
-                    let column = start - self.text[..start].rfind('\n').map_or(0, |i| i + 1) + 2;
+                    let column = self.column(start) + 2;
                     HandFileError {
                         file: self.origin.to_string(),
                         line,
@@ -278,7 +306,7 @@ fn state_names(ir: &Ir) -> Vec<String> {
 /// (the linear form, whose matrices depend on the parameters alone) its state and input names.
 fn base_scope(ir: &Ir, params_only: bool) -> Scope {
     let mut scope = Scope::new();
-    scope.insert("pi".into(), Expr::Num(std::f64::consts::PI));
+    scope.insert("pi".into(), Expr::Pi);
     for (i, p) in ir.params().iter().enumerate() {
         scope.insert(p.name.clone(), Expr::Var(Var::P(i)));
     }
@@ -295,7 +323,9 @@ fn base_scope(ir: &Ir, params_only: bool) -> Scope {
 }
 
 /// Adds the `[let]` names in dependency order (each may use the model's names and other lets,
-/// in any order in the file; a cycle or an unknown name is an error on its line).
+/// in any order in the file). Each let is parsed once, after the lets it uses: a depth-first walk
+/// over the names they use, without recursion (a chain of 30,000 lets is one), which names a
+/// cycle as the cycle it is.
 fn add_lets(
     src: &Source<'_>,
     lets: &BTreeMap<String, Spanned<Formula>>,
@@ -309,26 +339,53 @@ fn add_lets(
             ));
         }
     }
-    let mut pending: Vec<(&String, &Spanned<Formula>)> = lets.iter().collect();
-    while !pending.is_empty() {
-        let mut deferred = Vec::new();
-        let mut first_error = None;
-        for (name, value) in pending.iter().copied() {
-            match src.formula(&format!("let {name}"), value, scope) {
-                Ok(entry) => {
-                    scope.insert(name.clone(), entry.expr);
+    // The other lets each let uses (a formula that does not tokenise fails when it is parsed).
+    let uses: BTreeMap<&str, Vec<&str>> = lets
+        .iter()
+        .map(|(name, value)| {
+            let used = super::parse::names_used(&value.get_ref().text()).unwrap_or_default();
+            let used = used
+                .iter()
+                .filter_map(|u| lets.get_key_value(u.as_str()).map(|(k, _)| k.as_str()))
+                .collect();
+            (name.as_str(), used)
+        })
+        .collect();
+    let mut done: std::collections::BTreeSet<&str> = Default::default();
+    for root in lets.keys() {
+        // The path from `root`: each let with the index of the next name it uses to visit.
+        let mut path: Vec<(&str, usize)> = vec![(root.as_str(), 0)];
+        while let Some(&(name, next)) = path.last() {
+            if done.contains(name) {
+                path.pop();
+                continue;
+            }
+            match uses[name].get(next) {
+                Some(&used) => {
+                    path.last_mut().expect("on the path").1 += 1;
+                    if let Some(at) = path.iter().position(|(n, _)| *n == used) {
+                        let mut cycle: Vec<&str> = path[at..].iter().map(|(n, _)| *n).collect();
+                        cycle.push(used);
+                        return Err(src.error(
+                            lets[used].span().start,
+                            format!(
+                                "[let] names use each other in a cycle: {}",
+                                cycle.join(" → ")
+                            ),
+                        ));
+                    }
+                    if !done.contains(used) {
+                        path.push((used, 0));
+                    }
                 }
-                Err(e) => {
-                    first_error.get_or_insert(e);
-                    deferred.push((name, value));
+                None => {
+                    path.pop();
+                    let entry = src.formula(&format!("let {name}"), &lets[name], scope)?;
+                    scope.insert(name.to_string(), entry.expr);
+                    done.insert(name);
                 }
             }
         }
-        if deferred.len() == pending.len() {
-            // No progress: the first failure is a real one (unknown name, syntax, or a cycle).
-            return Err(first_error.expect("a deferred let has an error"));
-        }
-        pending = deferred;
     }
     Ok(())
 }
@@ -395,16 +452,16 @@ fn linear_names(ir: &Ir, src: &Source<'_>) -> Result<(Vec<String>, Vec<String>),
 /// Reads the hand file `text` (named `origin` in messages) against the model `ir`.
 pub fn read_hand_file(text: &str, origin: &str, ir: &Ir) -> Result<HandModel, HandFileError> {
     let list = |names: Vec<&str>| names.join(", ");
-    let src = Source {
+    let src = Source::new(
         text,
         origin,
-        names: format!(
+        format!(
             "states {}; inputs {}; parameters {}",
             list(ir.states().iter().map(|s| s.name.as_str()).collect()),
             list(ir.inputs().iter().map(|s| s.name.as_str()).collect()),
             list(ir.params().iter().map(|p| p.name.as_str()).collect()),
         ),
-    };
+    );
     let doc: Document = toml::from_str(text).map_err(|e| src.toml_error(&e))?;
     if let Some(model) = &doc.model {
         if model.get_ref() != ir.model() {
@@ -551,11 +608,7 @@ fn coriolis_times_speeds(rows: Vec<Vec<Entry>>, nq: usize) -> Vec<Entry> {
 /// The `model = "…"` a hand file names, read before the model is resolved (so that
 /// `twv audit --hand FILE` needs no `--model`); an error if the file is not TOML.
 pub fn model_named_in(text: &str, origin: &str) -> Result<Option<String>, HandFileError> {
-    let src = Source {
-        text,
-        origin,
-        names: String::new(),
-    };
+    let src = Source::new(text, origin, String::new());
     let table: toml::Table = toml::from_str(text).map_err(|e| src.toml_error(&e))?;
     Ok(table
         .get("model")

@@ -243,6 +243,7 @@ pub(super) fn audit_linear(
                 params: worst_params,
                 max_rel_at_given_params: given.entries[index].max_rel,
                 difference: None,
+                non_finite: super::audit::side_name(entry.non_finite),
             });
         }
     }

@@ -26,6 +26,9 @@ const MAX_OPAQUE: usize = 20_000;
 /// other parts, then states and inputs (`m2*b*sin(phi)*w_z^2`).
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
 enum Atom {
+    /// π: inside sin and cos its multiples of π/2 are exact; anywhere else it becomes its value
+    /// when the form is finished (the derivation writes it as a number).
+    Pi,
     Param(usize),
     Sin(Var),
     Cos(Var),
@@ -254,23 +257,37 @@ impl Poly {
         }
     }
 
-    /// The names and integer multiples this is a sum of (`2*phi - theta`), if it is one.
-    fn integer_combination(&self) -> Option<Vec<(Var, i32)>> {
-        self.terms
-            .iter()
-            .map(|(m, c)| {
-                let mut it = m.iter();
-                match (it.next(), it.next()) {
-                    (Some((Atom::Signal(v), 1)), None) if c.fract() == 0.0 && c.abs() <= 12.0 => {
-                        Some((*v, *c as i32))
-                    }
-                    (Some((Atom::Param(i), 1)), None) if c.fract() == 0.0 && c.abs() <= 12.0 => {
-                        Some((Var::P(*i), *c as i32))
-                    }
-                    _ => None,
+    /// The names with their integer multiples and the quarter turns this angle is a sum of
+    /// (`2*phi - theta + pi/2` is ([phi: 2, theta: -1], 1)), if it is one.
+    fn angle(&self) -> Option<(Vec<(Var, i32)>, i32)> {
+        let small = |c: f64| c.fract() == 0.0 && c.abs() <= 12.0;
+        let mut names = Vec::new();
+        let mut quarters = 0;
+        for (m, c) in &self.terms {
+            let mut it = m.iter();
+            match (it.next(), it.next()) {
+                (Some((Atom::Signal(v), 1)), None) if small(*c) => names.push((*v, *c as i32)),
+                (Some((Atom::Param(i), 1)), None) if small(*c) => {
+                    names.push((Var::P(*i), *c as i32))
                 }
-            })
-            .collect()
+                (Some((Atom::Pi, 1)), None) if small(2.0 * c) => quarters = (2.0 * c) as i32,
+                _ => return None,
+            }
+        }
+        Some((names, quarters))
+    }
+
+    /// π written as its value (`2*pi*m` is `6.283185307179586*m`), as the derivation has it.
+    fn pi_as_number(self) -> Poly {
+        let mut out = Poly::default();
+        for (mut m, c) in self.terms {
+            let c = match m.remove(&Atom::Pi) {
+                Some(e) => c * std::f64::consts::PI.powi(e),
+                None => c,
+            };
+            out.add_term(m, c);
+        }
+        out
     }
 
     /// Prints the form: terms in canonical order, negative exponents as a denominator.
@@ -283,6 +300,7 @@ impl Poly {
             let (num, den): (Vec<_>, Vec<_>) = m.iter().partition(|(_, e)| **e > 0);
             let factor = |(a, e): &(&Atom, &i32)| {
                 let text = match a {
+                    Atom::Pi => "pi".to_string(),
                     Atom::Param(i) => names.of(Var::P(*i)).to_string(),
                     Atom::Signal(v) => names.of(*v).to_string(),
                     Atom::Sin(v) => format!("sin({})", names.of(*v)),
@@ -341,29 +359,35 @@ fn number(v: f64) -> String {
 
 /// The canonical form of `e`.
 pub fn normal_form(e: &Expr, names: &Names<'_>) -> Result<Poly, TooLarge> {
+    Ok(form(e, names)?.pi_as_number())
+}
+
+/// The canonical form of `e`, π still an atom.
+fn form(e: &Expr, names: &Names<'_>) -> Result<Poly, TooLarge> {
     Ok(match e {
         Expr::Num(c) => Poly::constant(*c),
+        Expr::Pi => Poly::atom(Atom::Pi, 1),
         Expr::Var(v) => Poly::var(*v),
-        Expr::Neg(a) => Poly::default().plus(&normal_form(a, names)?, -1.0),
-        Expr::Add(a, b) => normal_form(a, names)?.plus(&normal_form(b, names)?, 1.0),
-        Expr::Sub(a, b) => normal_form(a, names)?.plus(&normal_form(b, names)?, -1.0),
-        Expr::Mul(a, b) => normal_form(a, names)?.times(&normal_form(b, names)?)?,
-        Expr::Div(a, b) => normal_form(a, names)?.times(&normal_form(b, names)?.inverse(names)?)?,
+        Expr::Neg(a) => Poly::default().plus(&form(a, names)?, -1.0),
+        Expr::Add(a, b) => form(a, names)?.plus(&form(b, names)?, 1.0),
+        Expr::Sub(a, b) => form(a, names)?.plus(&form(b, names)?, -1.0),
+        Expr::Mul(a, b) => form(a, names)?.times(&form(b, names)?)?,
+        Expr::Div(a, b) => form(a, names)?.times(&form(b, names)?.inverse(names)?)?,
         Expr::Pow(a, b) => match b.small_integer() {
-            Some(n) => normal_form(a, names)?.power(n, names)?,
+            Some(n) => form(a, names)?.power(n, names)?,
             None => {
-                let (base, exponent) = (normal_form(a, names)?, normal_form(b, names)?);
+                let (base, exponent) = (form(a, names)?, form(b, names)?);
                 let text = format!("({})^({})", base.print(names), exponent.print(names));
                 Poly::opaque(text)?
             }
         },
-        Expr::Call(f, a) => call(f, &normal_form(a, names)?, names)?,
+        Expr::Call(f, a) => call(f, &form(a, names)?, names)?,
     })
 }
 
 pub(super) fn call(f: &Func, arg: &Poly, names: &Names<'_>) -> Result<Poly, TooLarge> {
     let trig = |sine: bool| -> Result<Option<Poly>, TooLarge> {
-        let Some(combination) = arg.integer_combination() else {
+        let Some((combination, quarters)) = arg.angle() else {
             return Ok(None);
         };
         let units: i32 = combination.iter().map(|(_, k)| k.abs()).sum();
@@ -384,7 +408,14 @@ pub(super) fn call(f: &Func, arg: &Poly, names: &Names<'_>) -> Result<Poly, TooL
                 (s, c) = (next_s, next_c);
             }
         }
-        Ok(Some(if sine { s } else { c }))
+        // Then the quarter turns: sin(x + pi/2) = cos(x), cos(x + pi/2) = -sin(x).
+        let negated = |p: Poly| Poly::default().plus(&p, -1.0);
+        Ok(Some(match (sine, quarters.rem_euclid(4)) {
+            (true, 0) | (false, 3) => s,
+            (true, 1) | (false, 0) => c,
+            (true, 2) | (false, 1) => negated(s),
+            _ => negated(c),
+        }))
     };
     let expanded = match f {
         Func::Sin => trig(true)?,

@@ -76,8 +76,8 @@ impl Job for Steady {
         })
     }
 
-    fn run(model: &ResolvedModel, s: &SteadySettings, _p: &dyn Progress) -> Result<SteadyResult> {
-        steady_motion(model, s)
+    fn run(model: &ResolvedModel, s: &SteadySettings, p: &dyn Progress) -> Result<SteadyResult> {
+        steady_motion(model, s, p)
     }
 }
 

@@ -8,12 +8,15 @@ use super::options::{
     as_choice, as_number, as_vector, field, flag, is_none, number, sub, Kind, Opt,
 };
 use super::{Budget, Job, JobOutput, Verdict};
-use crate::api::{tune_model, TuneReport, TuneSettings, TuneVerdict};
+use crate::api::{tune_model_with, TuneReport, TuneSettings, TuneVerdict};
 use crate::error::{Error, Result};
 use crate::linear::PidGains;
 use crate::model::ResolvedModel;
 use crate::progress::Progress;
 use crate::tune::Objective;
+
+/// Most requirements of one specification.
+pub const MAX_REQUIREMENTS: usize = 16;
 
 /// The gain tuner.
 pub struct Tune;
@@ -144,20 +147,32 @@ impl Job for Tune {
                 format!("{} must be a finite angle > 0 rad", s.tilt),
             ));
         }
-        Ok(())
+        crate::control::check_tilt("tilt", s.tilt)?;
+        if s.spec.requirements.len() > MAX_REQUIREMENTS {
+            return Err(Error::input(
+                "spec",
+                format!(
+                    "{} requirements; at most {MAX_REQUIREMENTS}",
+                    s.spec.requirements.len()
+                ),
+            ));
+        }
+        crate::tune::validate(&s.options).map_err(|e| match e {
+            crate::tune::TuneError::Option { what, why } => Error::input(what, why),
+            other => other.into(),
+        })
     }
 
     fn budget(_model: &ResolvedModel, s: &TuneSettings) -> Result<Budget> {
         Ok(Budget {
             iterations: s.options.max_iterations as f64,
             frequency_points: s.options.points_per_decade as f64,
-            points: s.spec.requirements.len() as f64,
             ..Budget::default()
         })
     }
 
-    fn run(model: &ResolvedModel, s: &TuneSettings, _p: &dyn Progress) -> Result<TuneReport> {
-        tune_model(model, s)
+    fn run(model: &ResolvedModel, s: &TuneSettings, p: &dyn Progress) -> Result<TuneReport> {
+        tune_model_with(model, s, p)
     }
 }
 

@@ -2,13 +2,21 @@
 //! of a peak and bisection of a crossing. Shared by the margin computation and the tuner.
 
 /// `points_per_decade` log-spaced frequencies from `lo` to `hi` inclusive (`lo`, `hi` > 0).
+///
+/// At most [`MAX_DECADES`] decades above `lo`: loop scales of absurd gains (Kp = 1e300) put
+/// `hi` at infinity, which must make a long grid, not an infinite one.
 pub fn log_grid(lo: f64, hi: f64, points_per_decade: usize) -> Vec<f64> {
+    let hi = hi.min(lo * 10f64.powi(MAX_DECADES));
     let decades = (hi / lo).log10().max(0.0);
+    let decades = if decades.is_finite() { decades } else { 0.0 };
     let n = ((decades * points_per_decade.max(1) as f64).ceil() as usize).max(1);
     (0..=n)
         .map(|k| lo * (hi / lo).powf(k as f64 / n as f64))
         .collect()
 }
+
+/// The most decades a frequency grid spans.
+pub const MAX_DECADES: i32 = 60;
 
 /// Maximum of `f` on [a, b] (a, b > 0) by golden-section search in ln ω, down to a relative
 /// bracket of `rel_tol`. Returns (ω, f(ω)); assumes one peak in the bracket, which the caller

@@ -43,6 +43,17 @@ pub fn analyse_pitch(
     opts: &LoopOptions,
 ) -> Result<PitchAnalysis, LinearError> {
     let closed_loop = lp.closed_loop(gains, opts)?;
+    // Gains so large that the loop's matrix spans more than a double holds (a Ki of 1e86) give
+    // NaN poles: an input error, never poles and margins printed as NaN.
+    if closed_loop
+        .loop_eigenvalues
+        .iter()
+        .any(|e| !(e.re.is_finite() && e.im.is_finite()))
+    {
+        return Err(LinearError::NonFinite {
+            what: "closed-loop poles (the gains are too large for double precision)",
+        });
+    }
     let grid = GridOptions::around(&loop_scales(lp, gains, opts, &closed_loop)?);
     let l0 = |w: f64| lp.loop_delay_free(gains, opts.lag, w);
     let margins = loop_margins(&l0, opts.delay, closed_loop.stable, &grid);

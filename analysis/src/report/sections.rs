@@ -11,7 +11,7 @@ use super::findings::{
 use super::html::{Figure, Page};
 use super::{HorizonRow, ReportResults, ReportSettings};
 use crate::api::{
-    analyse, audit_model, portraits, simulate, spectrum, sweep, tune_model, LinearSettings,
+    analyse, audit_model, portraits, simulate, spectrum, sweep, tune_model_with, LinearSettings,
     PhaseSettings, Progress, SimSettings, SpectrumSettings, SweepSettings, TuneSettings, AUDITED,
 };
 use crate::audit::AuditSettings;
@@ -122,13 +122,28 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
         tolerance: settings.audit_tolerance,
         ..AuditSettings::default()
     };
+    // Each part hears a Ctrl-C (and a step that cannot, the audit and the linear analysis of
+    // a few milliseconds to a second, is followed by a look at it).
+    let quiet = &crate::progress::CancelOnly(progress);
+    let step = || {
+        progress.advance(1);
+        if progress.cancelled() {
+            Err(crate::error::Error::Interrupted)
+        } else {
+            Ok(())
+        }
+    };
     let audit = AUDITED
         .iter()
-        .map(|name| audit_model(&vehicle(settings, name)?, &audit_settings))
+        .map(|name| {
+            if progress.cancelled() {
+                return Err(crate::error::Error::Interrupted);
+            }
+            audit_model(&vehicle(settings, name)?, &audit_settings)
+        })
         .collect::<Result<Vec<_>>>()?;
-    progress.advance(1);
+    step()?;
 
-    let quiet = &crate::api::Silent;
     let preset = spectrum(
         &v8,
         &open_loop(&tilt, LyapunovSettings::preset_paper()),
@@ -158,7 +173,7 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    progress.advance(1);
+    step()?;
 
     let phase = portraits(
         &v8,
@@ -171,7 +186,7 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
         },
         quiet,
     )?;
-    progress.advance(1);
+    step()?;
 
     let recovery = [("forward tilt", TILT), ("backward tilt", -TILT)]
         .iter()
@@ -189,11 +204,11 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
             )
         })
         .collect::<Result<Vec<_>>>()?;
-    progress.advance(1);
+    step()?;
 
     let linear = analyse(&v8, &LinearSettings::default())?;
-    let tune = tune_model(&v8, &TuneSettings::default())?;
-    progress.advance(1);
+    let tune = tune_model_with(&v8, &TuneSettings::default(), quiet)?;
+    step()?;
 
     let n = if quick { 21 } else { 61 };
     let grid = Grid::study_gains(n);
@@ -202,7 +217,7 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
         &SweepSettings::new(grid, Metric::SpectralAbscissa),
         quiet,
     )?;
-    progress.advance(1);
+    step()?;
 
     let closed = spectrum(
         &v8,
@@ -218,7 +233,7 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
         },
         quiet,
     )?;
-    progress.advance(1);
+    step()?;
 
     let audit_ok = audit_check(&audit);
     let checks: Vec<Check> = vec![audit_ok.clone(), trace_check(&preset)];

@@ -278,6 +278,6 @@ impl Map {
 /// nothing).
 pub fn merge(dir: &Path) -> Result<(Map, Vec<PathBuf>), SweepError> {
     let map = collect(dir)?;
-    let written = map.files()?.write(dir)?;
+    let written = map.files()?.write(dir)?.files;
     Ok((map, written))
 }

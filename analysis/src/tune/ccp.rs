@@ -203,6 +203,8 @@ pub(crate) enum Phase1 {
     Feasible(Vec<f64>),
     /// No further progress with the slack still positive: the spec looks infeasible from here.
     Stalled,
+    /// The caller cancelled the run.
+    Interrupted,
 }
 
 /// Phase 1: drive the common slack σ on the `disks` of the spec to zero while keeping the
@@ -216,12 +218,16 @@ pub(crate) fn phase1(
     disks: &[Disk],
     floor: &[Disk],
     max_iter: usize,
+    stop: &dyn Fn() -> bool,
 ) -> Phase1 {
     let n = design.len();
     let mut x = x0.to_vec();
     for _ in 0..max_iter {
         if design.violation(&x, disks) <= 0.0 {
             return Phase1::Feasible(x);
+        }
+        if stop() {
+            return Phase1::Interrupted;
         }
         let (mut rows, mut rhs, radius) = design.linearise(&x, disks);
         for (row, r) in rows.iter_mut().zip(&radius) {
@@ -277,6 +283,8 @@ pub(crate) enum Phase2End {
     IterationLimit,
     /// A subproblem failed; the last feasible gains are kept.
     SolverFailed(String),
+    /// The caller cancelled the run.
+    Interrupted,
 }
 
 /// Phase 2: optimise the objective from feasible x0. Returns the gains, how it ended and the
@@ -287,6 +295,7 @@ pub(crate) fn phase2(
     disks: &[Disk],
     objective: &Objective,
     max_iter: usize,
+    stop: &dyn Fn() -> bool,
 ) -> (Vec<f64>, Phase2End, usize) {
     let n = design.len();
     let (p_diag, q) = match objective {
@@ -311,6 +320,9 @@ pub(crate) fn phase2(
     };
     let mut x = x0.to_vec();
     for it in 1..=max_iter {
+        if stop() {
+            return (x, Phase2End::Interrupted, it);
+        }
         let (rows, rhs, _) = design.linearise(&x, disks);
         let sub = Subproblem {
             p_diag: p_diag.clone(),

@@ -11,4 +11,4 @@ pub mod tuner;
 pub use ccp::Objective;
 pub use certificate::{certify, Certificate};
 pub use spec::{Requirement, Spec, SpecError};
-pub use tuner::{tune, TuneError, TuneOptions, TuneResult, TuneStatus};
+pub use tuner::{tune, tune_with, validate, TuneError, TuneOptions, TuneResult, TuneStatus};

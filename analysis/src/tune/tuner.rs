@@ -114,10 +114,23 @@ pub enum TuneError {
         /// Why.
         why: &'static str,
     },
+    /// The caller cancelled the run.
+    #[error("interrupted")]
+    Interrupted,
 }
 
 fn disks(spec: &Spec) -> Vec<Disk> {
     spec.requirements.iter().filter_map(|r| r.disk()).collect()
+}
+
+/// Most grid points per decade of the design (the tuner doubles them up to three times).
+pub const MAX_POINTS_PER_DECADE: usize = 10_000;
+/// Most subproblems of one phase of the tuner.
+pub const MAX_ITERATIONS: usize = 10_000;
+
+/// Checks every option of the tuner; the error names the first bad one.
+pub fn validate(options: &TuneOptions) -> Result<(), TuneError> {
+    check(options).map(|_| ())
 }
 
 fn check(options: &TuneOptions) -> Result<Objective, TuneError> {
@@ -137,10 +150,16 @@ fn check(options: &TuneOptions) -> Result<Objective, TuneError> {
             why: "must be finite and > 0",
         });
     }
-    if options.points_per_decade < 2 || options.max_iterations == 0 {
+    if !(2..=MAX_POINTS_PER_DECADE).contains(&options.points_per_decade) {
         return Err(TuneError::Option {
-            what: "points_per_decade/max_iterations",
-            why: "need at least 2 points a decade and 1 iteration",
+            what: "points_per_decade",
+            why: "must be between 2 and 10000",
+        });
+    }
+    if !(1..=MAX_ITERATIONS).contains(&options.max_iterations) {
+        return Err(TuneError::Option {
+            what: "max_iterations",
+            why: "must be between 1 and 10000",
         });
     }
     let objective = match (options.objective, options.target) {
@@ -160,6 +179,17 @@ fn check(options: &TuneOptions) -> Result<Objective, TuneError> {
 
 /// Tunes the pitch loop `lp` to `spec`.
 pub fn tune(lp: &PitchLoop, spec: &Spec, options: &TuneOptions) -> Result<TuneResult, TuneError> {
+    tune_with(lp, spec, options, &crate::progress::Silent)
+}
+
+/// [`tune`], looking at `progress` for a cancellation before every subproblem.
+pub fn tune_with(
+    lp: &PitchLoop,
+    spec: &Spec,
+    options: &TuneOptions,
+    progress: &dyn crate::progress::Progress,
+) -> Result<TuneResult, TuneError> {
+    let stop = || progress.cancelled();
     let objective = check(options)?;
     let opts = options.loop_options;
     if lp.plant().order() == 0 {
@@ -221,8 +251,10 @@ pub fn tune(lp: &PitchLoop, spec: &Spec, options: &TuneOptions) -> Result<TuneRe
             &disks(&aim),
             &floor,
             options.max_iterations,
+            &stop,
         ) {
             Phase1::Stalled => break,
+            Phase1::Interrupted => return Err(TuneError::Interrupted),
             Phase1::Feasible(x) => {
                 let (x, end, iterations) = phase2(
                     &design,
@@ -230,12 +262,14 @@ pub fn tune(lp: &PitchLoop, spec: &Spec, options: &TuneOptions) -> Result<TuneRe
                     &disks(&aim),
                     &objective,
                     options.max_iterations,
+                    &stop,
                 );
                 let cert = certify(lp, &design.gains(&x), &opts, spec)?;
                 if cert.meets_spec {
                     let status = match end {
                         Phase2End::Converged | Phase2End::SolverFailed(_) => TuneStatus::Solved,
                         Phase2End::IterationLimit => TuneStatus::IterationLimit,
+                        Phase2End::Interrupted => return Err(TuneError::Interrupted),
                     };
                     return Ok(TuneResult {
                         status,
@@ -260,7 +294,7 @@ pub fn tune(lp: &PitchLoop, spec: &Spec, options: &TuneOptions) -> Result<TuneRe
             }
         }
     }
-    best_achievable(lp, spec, options, &design, x0)
+    best_achievable(lp, spec, options, &design, x0, &stop)
 }
 
 /// Bisection on the fraction t of the spec for the best verified gains.
@@ -270,6 +304,7 @@ fn best_achievable(
     options: &TuneOptions,
     design: &Design,
     x0: Vec<f64>,
+    stop: &dyn Fn() -> bool,
 ) -> Result<TuneResult, TuneError> {
     let opts = options.loop_options;
     let (mut lo, mut hi) = (0.0, 1.0);
@@ -285,12 +320,14 @@ fn best_achievable(
             &disks(&aim),
             &floor,
             options.max_iterations,
+            stop,
         ) {
             Phase1::Feasible(x) => {
                 let cert = certify(lp, &design.gains(&x), &opts, &spec.scaled(mid))?;
                 cert.meets_spec.then_some((x, cert))
             }
             Phase1::Stalled => None,
+            Phase1::Interrupted => return Err(TuneError::Interrupted),
         };
         match found {
             Some((x, cert)) => {

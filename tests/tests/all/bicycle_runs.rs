@@ -25,7 +25,7 @@ fn eigenvalues(model: &ResolvedModel, v: f64) -> Vec<(f64, f64)> {
         step: 1.0,
         ..SteadySettings::default()
     };
-    steady_motion(model, &at).unwrap().points[0]
+    steady_motion(model, &at, &Silent).unwrap().points[0]
         .eigenvalues
         .clone()
 }

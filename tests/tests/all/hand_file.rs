@@ -428,3 +428,224 @@ mod audit {
         assert!(e.contains("give one form"), "{e}");
     }
 }
+
+/// A hand file is untrusted input: what a formula can cost is bounded as it is read, and the
+/// comparison cannot fail a correct formula on round-off (issue 38).
+mod hostile {
+    use std::time::{Duration, Instant};
+
+    use twv_analysis::api::{audit_hand, HandSource};
+    use twv_analysis::hand_file::expr::{Args, Expr, Var};
+    use twv_analysis::hand_file::normal::{normal_form, Names};
+    use twv_analysis::hand_file::parse::{parse, Scope, MAX_DEPTH, MAX_NODES};
+    use twv_analysis::hand_file::{read_hand_file, HandAuditSettings};
+    use twv_analysis::model::{ModelSource, ModelSpec, ParamSource};
+
+    fn scope() -> Scope {
+        let mut s = Scope::new();
+        s.insert("phi".into(), Expr::Var(Var::X(0)));
+        s.insert("b".into(), Expr::Var(Var::P(0)));
+        s.insert("pi".into(), Expr::Pi);
+        s
+    }
+
+    fn value(e: &Expr, phi: f64) -> f64 {
+        e.eval(&Args {
+            x: &[phi],
+            u: &[],
+            p: &[2.0],
+        })
+    }
+
+    #[test]
+    fn deep_nesting_is_an_error_naming_the_limit_not_a_stack_overflow() {
+        for text in [
+            format!("{}phi{}", "(".repeat(30_000), ")".repeat(30_000)),
+            format!("{}phi", "-".repeat(30_000)),
+            format!("{}phi{}", "sin(".repeat(30_000), ")".repeat(30_000)),
+            format!("phi{}", "^phi".repeat(30_000)),
+            // A product's factors nest: the tree of a*b*c*… is as deep as it is long.
+            format!("phi{}", "*phi".repeat(MAX_DEPTH + 1)),
+        ] {
+            let e = parse(&text, &scope()).unwrap_err();
+            assert!(
+                e.message
+                    .contains(&format!("deeper than {MAX_DEPTH} levels")),
+                "{}",
+                e.message
+            );
+        }
+        // Just inside the limit reads.
+        let inside = format!("{}phi{}", "(".repeat(150), ")".repeat(150));
+        assert_eq!(value(&parse(&inside, &scope()).unwrap(), 0.5), 0.5);
+    }
+
+    #[test]
+    fn a_flat_sum_of_50000_terms_reads_and_evaluates_in_a_balanced_tree() {
+        // 300 KB of formula, under the hand-file size cap: alternating signs, Σ = 25 000 phi - 25 000 b.
+        let mut text = String::from("phi");
+        for k in 1..50_000 {
+            text.push_str(if k % 2 == 1 { " - b" } else { " + phi" });
+        }
+        let e = parse(&text, &scope()).unwrap();
+        assert_eq!(value(&e, 0.5), 25_000.0 * 0.5 - 25_000.0 * 2.0);
+        // Short sums keep their left-to-right order (bit for bit what they were).
+        let short = parse("phi - b + phi - b", &scope()).unwrap();
+        assert!(matches!(short, Expr::Sub(..)));
+        let names = Names {
+            states: &["phi".to_string()],
+            inputs: &[],
+            params: &["b".to_string()],
+        };
+        // The balanced tree has the same canonical form as the sum it is.
+        let long = format!("phi{}", " - b + phi".repeat(20));
+        let form = normal_form(&parse(&long, &scope()).unwrap(), &names).unwrap();
+        assert_eq!(form.print(&names), "-20*b + 21*phi");
+    }
+
+    fn file(body: &str) -> String {
+        format!("model = \"lorenz\"\n{body}")
+    }
+
+    fn read(text: &str) -> Result<(), String> {
+        let model = ModelSpec {
+            model: ModelSource::Shipped("lorenz".into()),
+            params: ParamSource::Defaults,
+            ..ModelSpec::default()
+        }
+        .resolve()
+        .unwrap();
+        read_hand_file(text, "hostile.toml", &model.ir)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn lets_that_grow_exponentially_are_refused_before_they_are_copied() {
+        // a1 = x + x, a2 = a1 + a1, …: a40 would have 2^41 nodes.
+        let mut lets = String::from("[let]\na0 = \"x\"\n");
+        for k in 1..=40 {
+            lets.push_str(&format!("a{k} = \"a{} * a{}\"\n", k - 1, k - 1));
+        }
+        let text = file(&format!("{lets}[f]\nx = \"a40\"\ny = 0\nz = 0\n"));
+        let started = Instant::now();
+        let e = read(&text).unwrap_err();
+        assert!(e.contains(&format!("more than {MAX_NODES}")), "{e}");
+        assert!(e.contains("let a"), "{e}");
+        assert!(started.elapsed() < Duration::from_secs(5));
+    }
+
+    #[test]
+    fn a_let_cycle_is_named_as_a_cycle_and_a_long_chain_reads_once_each() {
+        let text =
+            file("[let]\na = \"b + 1\"\nb = \"c*2\"\nc = \"a\"\n[f]\nx = \"a\"\ny = 0\nz = 0\n");
+        let e = read(&text).unwrap_err();
+        assert!(e.contains("cycle: a → b → c → a"), "{e}");
+        assert!(e.contains("hostile.toml:"), "{e}");
+        let text = file("[let]\na = \"a\"\n[f]\nx = \"a\"\ny = 0\nz = 0\n");
+        assert!(read(&text).unwrap_err().contains("cycle: a → a"));
+        // 20 000 lets, each using the one after it (the worst order for a retrying reader).
+        let mut lets = String::from("[let]\n");
+        for k in 0..20_000 {
+            lets.push_str(&format!("l{k} = \"l{}\"\n", k + 1));
+        }
+        lets.push_str("l20000 = \"x\"\n");
+        let text = file(&format!("{lets}[f]\nx = \"nowhere\"\ny = 0\nz = 0\n"));
+        let started = Instant::now();
+        let e = read(&text).unwrap_err();
+        assert!(e.contains("unknown name `nowhere`"), "{e}");
+        assert!(
+            started.elapsed() < Duration::from_secs(10),
+            "{:?}",
+            started.elapsed()
+        );
+        assert!(read(&file("[f]\nx = \"1e999\"\ny = 0\nz = 0\n"))
+            .unwrap_err()
+            .contains("`1e999` is not a finite number"));
+    }
+
+    #[test]
+    fn pi_is_exact_in_the_simplified_difference() {
+        let names = Names {
+            states: &["phi".to_string()],
+            inputs: &[],
+            params: &["b".to_string()],
+        };
+        let form = |t: &str| {
+            normal_form(&parse(t, &scope()).unwrap(), &names)
+                .unwrap()
+                .print(&names)
+        };
+        assert_eq!(form("sin(pi - phi)"), "sin(phi)");
+        assert_eq!(form("cos(phi - pi/2)"), "sin(phi)");
+        assert_eq!(form("sin(phi + pi)"), "-sin(phi)");
+        assert_eq!(form("cos(2*phi + 3*pi/2) - sin(2*phi)"), "0");
+        assert_eq!(form("sin(pi - phi) - sin(phi)"), "0");
+        // Elsewhere pi is its value, as the derivation writes it.
+        assert_eq!(form("2*pi*b"), format!("{}*b", 2.0 * std::f64::consts::PI));
+    }
+
+    fn vehicle8() -> twv_analysis::model::ResolvedModel {
+        let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+        ModelSpec {
+            model: ModelSource::Shipped("vehicle8".into()),
+            params: ParamSource::File(root.join("vehicles/paper.toml")),
+            ..ModelSpec::default()
+        }
+        .resolve()
+        .unwrap()
+    }
+
+    fn audit(text: &str) -> twv_analysis::hand_file::HandAuditReport {
+        let source = HandSource::Text {
+            text: text.to_string(),
+            origin: "pi.toml".into(),
+        };
+        audit_hand(&vehicle8(), &source, &HandAuditSettings::default()).unwrap()
+    }
+
+    fn vehicle8_hand() -> String {
+        let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+        std::fs::read_to_string(root.join("examples/hand/vehicle8.toml")).unwrap()
+    }
+
+    #[test]
+    fn round_off_at_the_hanging_rest_state_does_not_fail_a_correct_formula() {
+        // sin(pi - phi) is sin(phi), but at phi = pi (the hanging rest state, where the whole of
+        // F is round-off) it evaluates to 1.2e-16 where the derivation has 0.
+        let text = vehicle8_hand();
+        for correct in ["sin(pi - phi)", "cos(phi - pi/2)", "-sin(phi + pi)"] {
+            let planted = text.replacen("sp = \"sin(phi)\"", &format!("sp = \"{correct}\""), 1);
+            assert_ne!(planted, text);
+            let report = audit(&planted);
+            assert!(report.passed, "{correct}: {}", report.table());
+        }
+        // A wrong one still fails, with its term.
+        let wrong = text.replacen("-m2*g*b*sp", "-m2*g*b*sin(pi + phi)", 1);
+        let report = audit(&wrong);
+        assert!(!report.passed);
+        assert_eq!(report.disagreements[0].label, "F[w_y]");
+        assert_eq!(
+            report.disagreements[0].difference.as_deref(),
+            Some("2*m2*g*b*sin(phi)")
+        );
+    }
+
+    #[test]
+    fn a_non_finite_entry_is_named_as_such_not_printed_as_a_zero_difference() {
+        // 0*log(phi - phi) simplifies to 0 and evaluates to 0*(-inf) = NaN.
+        let text = vehicle8_hand().replacen("v_x = 0", "v_x = \"0*log(phi - phi)\"", 1);
+        let report = audit(&text);
+        assert!(!report.passed);
+        let d = &report.disagreements[0];
+        assert_eq!(d.label, "F[v_x]");
+        assert_eq!(d.non_finite, Some("hand"));
+        assert_eq!(d.difference, None);
+        let table = report.table();
+        assert!(
+            table.contains("F[v_x]") && table.contains("not finite"),
+            "{table}"
+        );
+        assert!(!table.contains("F[v_x] = 0"), "{table}");
+    }
+}

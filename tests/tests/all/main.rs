@@ -20,6 +20,7 @@ mod linear;
 mod lyapunov;
 mod lyapunov_parts;
 mod output;
+mod properties;
 mod report;
 mod serve;
 mod steady;

@@ -400,3 +400,117 @@ fn the_server_answers_over_a_socket_refuses_huge_bodies_unread_and_stops() {
         STOP.raise();
     });
 }
+
+fn post_over_socket(addr: std::net::SocketAddr, path: &str, body: &Value) -> TcpStream {
+    let body = body.to_string();
+    let mut stream = TcpStream::connect(addr).unwrap();
+    stream
+        .set_read_timeout(Some(std::time::Duration::from_secs(30)))
+        .unwrap();
+    let request = format!(
+        "POST {path} HTTP/1.1\r\nHost: x\r\nContent-Length: {}\r\nConnection: close\r\n\r\n{body}",
+        body.len()
+    );
+    stream.write_all(request.as_bytes()).unwrap();
+    stream
+}
+
+fn answer_of(mut stream: TcpStream) -> String {
+    let mut text = String::new();
+    let _ = stream.read_to_string(&mut text);
+    text
+}
+
+/// One job thread, one place in the queue, a time limit: a job past the limit is stopped and
+/// answered 413, a job beyond the queue 503 at once, `GET /api/model` answers while jobs run, a
+/// job whose client left is cancelled (the next one starts at once), and the server stops
+/// within a second with a job running (issue 38).
+#[test]
+fn heavy_requests_are_queued_limited_in_time_and_cancelled_when_their_client_leaves() {
+    use std::time::{Duration, Instant};
+    let limit = Duration::from_secs(3);
+    let settings = ServeSettings {
+        port: 0,
+        workers: 1,
+        queue: 1,
+        time_limit: limit,
+        ..ServeSettings::default()
+    };
+    let server = Server::bind(model(), &settings).unwrap();
+    let addr = server.addr();
+    static STOP: CancelFlag = CancelFlag::new();
+    struct StopOnDrop;
+    impl Drop for StopOnDrop {
+        fn drop(&mut self) {
+            STOP.raise();
+        }
+    }
+    // Within every budget limit (1 600 points, 1.8e7 steps), but seconds of work: longer than
+    // the limit.
+    let heavy =
+        json!({"options": {"kp": "0:8000:40", "kd": "0:4000:40", "metric": "max-lyapunov"}});
+    let cheap = json!({});
+    std::thread::scope(|scope| {
+        let run = scope.spawn(|| server.run(&STOP));
+        let _stop = StopOnDrop;
+        let started = Instant::now();
+        let first = post_over_socket(addr, "/api/sweep", &heavy);
+        std::thread::sleep(Duration::from_millis(300));
+        let second = post_over_socket(addr, "/api/sweep", &heavy);
+        std::thread::sleep(Duration::from_millis(300));
+        let third = answer_of(post_over_socket(addr, "/api/sweep", &heavy));
+        assert!(third.starts_with("HTTP/1.1 503"), "{third}");
+        assert!(
+            third.contains("busy") && third.contains("Retry-After"),
+            "{third}"
+        );
+        let asked = Instant::now();
+        let info = http(addr, b"GET /api/model HTTP/1.1\r\nHost: x\r\n\r\n");
+        assert!(info.starts_with("HTTP/1.1 200"), "{info}");
+        assert!(
+            asked.elapsed() < Duration::from_secs(1),
+            "{:?}",
+            asked.elapsed()
+        );
+        let first = answer_of(first);
+        assert!(first.starts_with("HTTP/1.1 413"), "{first}");
+        assert!(first.contains("time limit of 3 s"), "{first}");
+        let took = started.elapsed();
+        assert!(
+            took >= limit && took < limit + Duration::from_secs(2),
+            "{took:?}"
+        );
+        // The second job ran after the first (its own 3 s), and was stopped the same way.
+        assert!(answer_of(second).starts_with("HTTP/1.1 413"));
+
+        // A client that leaves: its job is cancelled, and the next job starts at once.
+        drop(post_over_socket(addr, "/api/sweep", &heavy));
+        std::thread::sleep(Duration::from_millis(300));
+        let asked = Instant::now();
+        let next = answer_of(post_over_socket(addr, "/api/linearize", &cheap));
+        assert!(next.starts_with("HTTP/1.1 200"), "{next}");
+        assert!(
+            asked.elapsed() < Duration::from_secs(2),
+            "{:?}",
+            asked.elapsed()
+        );
+
+        // Stopping with a job running: the server is gone as soon as the job's chunk under way
+        // ends (64 map points: about a second in this unoptimised test build, 0.1 s in release).
+        let running = post_over_socket(addr, "/api/sweep", &heavy);
+        std::thread::sleep(Duration::from_millis(300));
+        let stopping = Instant::now();
+        STOP.raise();
+        run.join().unwrap();
+        assert!(
+            stopping.elapsed() < Duration::from_secs(3),
+            "{:?}",
+            stopping.elapsed()
+        );
+        let last = answer_of(running);
+        assert!(
+            last.is_empty() || last.starts_with("HTTP/1.1 503"),
+            "{last}"
+        );
+    });
+}

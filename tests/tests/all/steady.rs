@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 
 use serde_json::Value;
-use twv_analysis::api::{steady_motion, SteadySettings, SteadyVerdict};
+use twv_analysis::api::{steady_motion, Silent, SteadySettings, SteadyVerdict};
 use twv_analysis::model::{Engine, ModelSpec};
 use twv_analysis::Error;
 
@@ -47,7 +47,7 @@ fn eigenvalues_equal_table_2_and_the_stable_range_the_papers() {
         step: 1.0,
         ..SteadySettings::default()
     };
-    let result = steady_motion(&model, &settings).unwrap();
+    let result = steady_motion(&model, &settings, &Silent).unwrap();
     assert_eq!(result.modes, ["phi", "delta", "w_phi", "w_delta"]);
     assert_eq!(result.points.len(), 11);
     let mut worst: f64 = 0.0;
@@ -81,7 +81,7 @@ fn the_verdict_flips_with_the_speeds_looked_at() {
         step: 0.1,
         ..SteadySettings::default()
     };
-    let result = steady_motion(&model, &slow).unwrap();
+    let result = steady_motion(&model, &slow, &Silent).unwrap();
     assert_eq!(result.verdict, SteadyVerdict::NowhereStable);
     assert!(result.stable_ranges.is_empty());
     // A grid inside the stable range: the whole grid is the range, bounds at its edges.
@@ -91,7 +91,7 @@ fn the_verdict_flips_with_the_speeds_looked_at() {
         step: 0.5,
         ..SteadySettings::default()
     };
-    let result = steady_motion(&model, &inside).unwrap();
+    let result = steady_motion(&model, &inside, &Silent).unwrap();
     assert_eq!(result.stable_ranges, vec![(4.5, 5.5)]);
 }
 
@@ -110,21 +110,21 @@ fn bad_grids_and_models_without_a_steady_motion_are_refused() {
             step,
             ..SteadySettings::default()
         };
-        let err = steady_motion(&model, &settings).unwrap_err();
+        let err = steady_motion(&model, &settings, &Silent).unwrap_err();
         assert!(
             matches!(&err, Error::Input { field: f, .. } if f == field),
             "{err}"
         );
     }
     let lorenz = ModelSpec::shipped("lorenz").resolve().unwrap();
-    let err = steady_motion(&lorenz, &SteadySettings::default()).unwrap_err();
+    let err = steady_motion(&lorenz, &SteadySettings::default(), &Silent).unwrap_err();
     assert!(err.to_string().contains("no steady motion"), "{err}");
 }
 
 #[test]
 fn the_figure_follows_each_mode_through_the_crossings() {
     let model = ModelSpec::shipped("whipple").resolve().unwrap();
-    let result = steady_motion(&model, &SteadySettings::default()).unwrap();
+    let result = steady_motion(&model, &SteadySettings::default(), &Silent).unwrap();
     let branches = result.branches();
     assert_eq!(branches.len(), 4);
     let at = |v: f64| {

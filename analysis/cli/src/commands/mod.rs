@@ -65,12 +65,9 @@ pub fn interrupted_or<T>(
     result: twv_analysis::Result<T>,
     what: &str,
 ) -> Result<Result<T, Outcome>> {
-    use twv_analysis::{control::ControlError, lyapunov::LyapunovError, Error};
     match result {
         Ok(v) => Ok(Ok(v)),
-        Err(Error::Interrupted)
-        | Err(Error::Lyapunov(LyapunovError::Interrupted))
-        | Err(Error::Control(ControlError::Interrupted)) => Ok(Err(Outcome::Interrupted(format!(
+        Err(e) if e.is_interrupted() => Ok(Err(Outcome::Interrupted(format!(
             "{what} stopped; nothing written"
         )))),
         Err(e) => Err(e.into()),

@@ -54,9 +54,14 @@ pub fn run(args: &ReportArgs, ctx: &Context) -> Result<Outcome> {
         },
     };
     let bar = ctx.bar();
-    let report = build(&settings, &bar)?;
+    let report = match super::interrupted_or(build(&settings, &bar), "the report")? {
+        Ok(report) => report,
+        Err(outcome) => return Ok(outcome),
+    };
     let files = report.files.0.len();
-    report.files.write(&out)?;
+    for note in report.files.write(&out)?.left {
+        ctx.say(format!("note: {note}"));
+    }
     let index = out.join("index.html");
     ctx.say(format!(
         "wrote {files} files in {} ({:.1} s); open {}",
