@@ -1,8 +1,8 @@
 //! Every job's JSON settings and flat options, as the HTTP API and the JSON runner take them:
 //! the first byte picks a job of the registry, the rest is the request body. Settings are
 //! refused with one line naming a field, or accepted with a finite budget; accepted settings of
-//! a small budget run to a result or an error (never a panic, a NaN in the JSON, a hang). The
-//! same body through the server's router gets an HTTP status and a JSON answer.
+//! a small budget run to a result or an error (never a panic, a NaN in the summary, a hang),
+//! and through the server's route (`POST /api/<job>`) to a status and a JSON answer.
 #![no_main]
 #![deny(warnings)]
 
@@ -76,6 +76,18 @@ fuzz_target!(|data: &[u8]| {
                     done.json().expect("a result writes as JSON");
                     let summary = done.summary();
                     assert!(!summary.contains("NaN"), "{summary}");
+                }
+                // The same body through the HTTP route: a status and a JSON answer.
+                if job.served() {
+                    let path = format!("/api/{}", job.name());
+                    let reply = twv_serve::respond(state(), "POST", &path, body);
+                    assert!(
+                        matches!(reply.status, 200 | 400 | 413 | 422),
+                        "{}",
+                        reply.status
+                    );
+                    let answer: Value = serde_json::from_slice(&reply.body).expect("JSON");
+                    assert!(answer.get("result").is_some() || answer.get("error").is_some());
                 }
             }
         }

@@ -444,6 +444,20 @@ fn tune_meets_a_disk_phase_margin_and_the_gains_check_out() {
     assert!(dpm >= 45.0 - 1e-6, "{dpm}");
 }
 
+/// An objective that stops at the iteration limit is not called an optimum (issue 38: "met
+/// (IterationLimit)" with Kp = 241,326 read as a tuned result); one that converges is.
+#[test]
+fn an_objective_stopped_at_the_iteration_limit_says_so() {
+    let unbounded = ok(&["tune", "--pid", "--objective", "max-proportional"]);
+    assert!(unbounded.contains("not an optimum"), "{unbounded}");
+    assert!(unbounded.contains("limit of 60 subproblems"), "{unbounded}");
+    let j = json(&["tune", "--pid", "--objective", "max-proportional"]);
+    assert_eq!(j["result"]["status"], "IterationLimit");
+    let converged = ok(&["tune", "--spec", "dpm>=45"]);
+    assert!(converged.contains("met (Solved"), "{converged}");
+    assert!(!converged.contains("not an optimum"), "{converged}");
+}
+
 #[test]
 fn tune_reports_an_infeasible_spec_with_the_best_fraction() {
     let out = twv(&["tune", "--spec", "dpm>=89.9", "--delay", "0.2", "--json"]);

@@ -370,7 +370,18 @@ async function tune() {
     verdict.textContent = r.verdict.replace("_", " ");
     verdict.className = `verdict ${r.verdict}`;
     if (cert && r.verdict === "met") {
-      for (const k of ["kp", "ki", "kd"]) $(k).value = cert.gains[k];
+      // A slider clamps a value beyond its range: widen the range to the certified gains (and
+      // say so) rather than show gains the certificate is not about.
+      const widened = [];
+      for (const k of ["kp", "ki", "kd"]) {
+        const slider = $(k), value = cert.gains[k];
+        if (value > Number(slider.max)) {
+          slider.max = String(Math.ceil(value));
+          widened.push(`${k} to ${slider.max}`);
+        }
+        slider.value = value;
+      }
+      if (widened.length) $("tune-status").append(`; slider range widened: ${widened.join(", ")}`);
       twv.tuned = cert.gains;
       schedule();
     }
