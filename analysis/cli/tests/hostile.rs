@@ -198,6 +198,19 @@ fn negative_numbers_parse_and_out_of_range_ones_are_named() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // A speed range that starts below zero is a range, not an option (issue 38): the bicycle
+    // runs backwards there, and is nowhere self-stable (exit 3, a verdict, not a parse error).
+    let out = twv(&[
+        "steady",
+        "--model",
+        "whipple",
+        "--speed",
+        "-10:0:0.5",
+        "--quiet",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(3), "{stdout}");
+    assert!(stdout.contains("21 speeds -10…0 m/s"), "{stdout}");
 }
 
 #[test]
@@ -420,4 +433,52 @@ fn messages_name_real_options_and_readable_numbers() {
         &out,
         &["settings field `points_per_decade`", "between 2 and 10000"],
     );
+}
+
+/// A second Ctrl-C right after the first, while the sweep finishes its chunk and writes its
+/// checkpoint: the checkpoint is written whole and renamed into place before twv exits, and no
+/// temporary file is left (issue 38: all progress was lost).
+#[test]
+fn a_second_ctrl_c_during_the_checkpoint_keeps_it() {
+    let dir = scratch("second-sigint");
+    let out = dir.join("map");
+    let child = Command::new(env!("CARGO_BIN_EXE_twv"))
+        .args([
+            "sweep",
+            "--out",
+            out.to_str().unwrap(),
+            "--kp",
+            "800:8000:40",
+            "--kd",
+            "200:4000:40",
+            "--metric",
+            "max-lyapunov",
+            "--quiet",
+        ])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let pid = child.id().to_string();
+    for pause in [50, 0] {
+        assert!(Command::new("kill")
+            .args(["-INT", &pid])
+            .status()
+            .unwrap()
+            .success());
+        std::thread::sleep(Duration::from_millis(pause));
+    }
+    let done = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&done.stderr);
+    assert_eq!(done.status.code(), Some(130), "{stderr}");
+    let checkpoint = out.join("checkpoint-0-of-1.json");
+    let text = std::fs::read_to_string(&checkpoint).expect("the checkpoint is there");
+    let json: serde_json::Value = serde_json::from_str(&text).expect("whole JSON");
+    assert!(!json["points"].as_array().unwrap().is_empty());
+    let leftovers: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
 }
