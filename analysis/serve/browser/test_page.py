@@ -219,3 +219,27 @@ def test_tune_moves_the_sliders_to_the_certificate(server, browser):
         browser,
         "return window.twv.gains.kd == Number(document.getElementById('kd').value)",
     )
+
+
+def test_certified_gains_beyond_a_slider_widen_it_instead_of_being_clamped(
+    server, browser
+):
+    """dpm>=80 certifies Kp ≈ 13 900, beyond the Kp slider's 10 000 (issue 38: the page used to
+    show the clamped 10 000 beside a 'met' verdict)."""
+    browser.get(server)
+    wait_for(browser, "return window.twv && window.twv.updates >= 1")
+    browser.execute_script("document.getElementById('spec').value = 'dpm>=80';")
+    browser.find_element("id", "tune").click()
+    tuned = wait_for(browser, "return window.twv.tuned")
+    out = twv("tune", "--spec", "dpm>=80", "--json")
+    assert out.returncode == 0, out.stderr
+    certificate = json.loads(out.stdout)["result"]["certificate"]["gains"]
+    assert tuned == certificate
+    assert certificate["kp"] > 10_000
+    kp = browser.find_element("id", "kp")
+    assert float(kp.get_attribute("max")) >= certificate["kp"]
+    # To the slider's 10-unit step.
+    assert math.isclose(
+        float(kp.get_attribute("value")), certificate["kp"], abs_tol=10.0
+    )
+    assert "slider range widened: kp" in browser.find_element("id", "tune-status").text
