@@ -4,16 +4,11 @@
 #![no_main]
 #![deny(warnings)]
 
-use std::sync::OnceLock;
+mod common;
 
+use common::vehicle8;
 use libfuzzer_sys::fuzz_target;
 use twv_analysis::hand_file::{audit_hand_model, read_hand_file, HandAuditSettings};
-use twv_analysis::model::{ModelSpec, ResolvedModel};
-
-fn vehicle8() -> &'static ResolvedModel {
-    static MODEL: OnceLock<ResolvedModel> = OnceLock::new();
-    MODEL.get_or_init(|| ModelSpec::shipped("vehicle8").resolve().expect("vehicle8"))
-}
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {

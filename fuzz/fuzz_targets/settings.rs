@@ -8,16 +8,13 @@
 
 use std::sync::OnceLock;
 
+mod common;
+
+use common::vehicle8;
 use libfuzzer_sys::fuzz_target;
 use serde_json::Value;
 use twv_analysis::api::Silent;
 use twv_analysis::jobs::{registry, Budget};
-use twv_analysis::model::{ModelSpec, ResolvedModel};
-
-fn vehicle8() -> &'static ResolvedModel {
-    static MODEL: OnceLock<ResolvedModel> = OnceLock::new();
-    MODEL.get_or_init(|| ModelSpec::shipped("vehicle8").resolve().expect("vehicle8"))
-}
 
 fn state() -> &'static twv_serve::State {
     static STATE: OnceLock<twv_serve::State> = OnceLock::new();

@@ -15,13 +15,18 @@ const X8: &str = "0.1,0,0,0,0,0,0,0";
 
 /// Runs the binary, killing it after `limit`: a hang fails the test instead of the CI run.
 fn bounded(args: &[&str], limit: Duration) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_twv"))
+    let child = Command::new(env!("CARGO_BIN_EXE_twv"))
         .args(args)
         .env_remove("RUST_BACKTRACE")
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
+    wait_within(child, limit, &format!("twv {args:?}"))
+}
+
+/// Waits for `child`, killing it after `limit`: a hang fails the test (naming `what`).
+fn wait_within(mut child: std::process::Child, limit: Duration, what: &str) -> Output {
     let start = Instant::now();
     loop {
         if child.try_wait().unwrap().is_some() {
@@ -29,9 +34,9 @@ fn bounded(args: &[&str], limit: Duration) -> Output {
         }
         if start.elapsed() > limit {
             let _ = child.kill();
-            panic!("twv {args:?} still running after {limit:?}");
+            panic!("{what} still running after {limit:?}");
         }
-        std::thread::sleep(Duration::from_millis(20));
+        std::thread::sleep(Duration::from_millis(10));
     }
 }
 
@@ -387,16 +392,11 @@ fn one_ctrl_c_stops_every_long_command_within_a_second() {
             .status()
             .unwrap()
             .success());
-        let out = loop {
-            if child.try_wait().unwrap().is_some() {
-                break child.wait_with_output().unwrap();
-            }
-            if sent.elapsed() > Duration::from_secs(10) {
-                let _ = child.kill();
-                panic!("{args:?} still running 10 s after Ctrl-C");
-            }
-            std::thread::sleep(Duration::from_millis(10));
-        };
+        let out = wait_within(
+            child,
+            Duration::from_secs(10),
+            &format!("{args:?} after Ctrl-C"),
+        );
         let took = sent.elapsed();
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(130), "{args:?}: {stderr}");
