@@ -29,35 +29,8 @@ if ! command -v aarch64-linux-gnu-gcc >/dev/null || ! command -v qemu-aarch64-st
         gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user-static >/dev/null
 fi
 
-# The standard library's source for `-Z build-std`, where cargo looks for it (what `rustup
-# component add rust-src` would put there): Debian's rust-src of the same version, which carries
-# its dependencies vendored (library/vendor).
-sysroot="$(rustc --print sysroot)"
-if [ ! -f "$sysroot/lib/rustlib/src/rust/library/core/Cargo.toml" ]; then
-    version="$(rustc -V | cut -d' ' -f2)"
-    case "$version" in
-    1.95.0)
-        deb="rust-src_1.95.0+dfsg1-2~bpo13+1_all.deb"
-        sha256="7b76db5b880a77f9e52975d2baa6209d2f76d2c9c2789515c3088cb960e2c83b"
-        ;;
-    *)
-        echo "aarch64 test: no pinned Debian rust-src for rustc $version (add its package" \
-            "from trixie-backports or sid, and its SHA-256, to $0)"
-        exit 1
-        ;;
-    esac
-    cache="$PWD/target/aarch64-std-src"
-    mkdir -p "$cache"
-    if [ ! -f "$cache/$deb" ] || ! echo "$sha256  $cache/$deb" | sha256sum -c --quiet 2>/dev/null; then
-        curl -fsS --retry 3 -o "$cache/$deb.part" "https://deb.debian.org/debian/pool/main/r/rustc/$deb"
-        echo "$sha256  $cache/$deb.part" | sha256sum -c --quiet
-        mv "$cache/$deb.part" "$cache/$deb"
-    fi
-    rm -rf "$cache/root"
-    dpkg-deb -x "$cache/$deb" "$cache/root"
-    mkdir -p "$sysroot/lib/rustlib/src"
-    ln -sfn "$cache/root/usr/src/rustc-$version" "$sysroot/lib/rustlib/src/rust"
-fi
+# The standard library's source for `-Z build-std` (shared with the Cortex-M test).
+bash .ci/rust-src.sh
 [ "${1:-}" = "--install-only" ] && exit 0
 native="$(realpath "${1:-target/debug/twv}")"
 [ -x "$native" ] || { echo "aarch64 test: no x86-64 twv at $native (build it first)"; exit 1; }

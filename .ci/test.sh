@@ -33,12 +33,14 @@ step "ruff"
 .venv/bin/ruff format --check modeling analysis/benches analysis/serve/browser python
 
 # Debian's Slurm and MUNGE for the cluster test, Chromium with its WebDriver for the browser
-# test, and the aarch64 cross tools (gcc, qemu, the standard library's source) for the NEON
-# test at the end, installed while Rust builds (one after the other: apt holds a lock).
-step "Slurm, MUNGE, Chromium, ChromeDriver and aarch64 cross packages (in the background)"
+# test, the aarch64 cross tools (gcc, qemu, the standard library's source) for the NEON test and
+# QEMU's Arm system emulator for the Cortex-M test at the end, installed while Rust builds (one
+# after the other: apt holds a lock).
+step "Slurm, MUNGE, Chromium, ChromeDriver, aarch64 and Cortex-M packages (in the background)"
 mkdir -p target
 ( bash .ci/slurm-test.sh --install-only && bash .ci/browser-test.sh --install-only &&
-    bash .ci/aarch64-test.sh --install-only ) >target/slurm-install.log 2>&1 &
+    bash .ci/aarch64-test.sh --install-only && bash .ci/cortex-m-test.sh --install-only ) \
+    >target/slurm-install.log 2>&1 &
 slurm_install_pid=$!
 
 step "pytest modeling/"
@@ -51,6 +53,7 @@ step "IR freshness (generated/ir is what the modeling code derives today)"
 step "cargo fmt --check"
 cargo fmt --all --check
 cargo fmt --manifest-path fuzz/Cargo.toml --check
+cargo fmt --manifest-path firmware/qemu/Cargo.toml --check
 
 # One build of every target, linted: clippy-driver compiles the workspace crates with -D warnings
 # (the lints of `cargo clippy --workspace --all-targets -- -D warnings`, see .ci/clippy-rustc), so
@@ -88,7 +91,7 @@ compile_fail_pid=$!
 step "a real single-node Slurm cluster: sbatch --array shards of a sweep (in the background)"
 if ! wait "$slurm_install_pid"; then
     cat target/slurm-install.log
-    echo "installing Slurm, MUNGE, Chromium or the aarch64 cross tools failed"
+    echo "installing Slurm, MUNGE, Chromium, the aarch64 cross tools or QEMU for Arm failed"
     exit 1
 fi
 ( bash .ci/slurm-test.sh target/debug/twv >target/slurm-test.log 2>&1 ) &
@@ -104,6 +107,11 @@ browser_pid=$!
 step "aarch64: cross-build for aarch64, run the NEON tests under qemu (in the background)"
 ( bash .ci/aarch64-test.sh target/debug/twv >target/aarch64-test.log 2>&1 ) &
 aarch64_pid=$!
+
+# The firmware crate built for a Cortex-M4F and run under QEMU's system emulation: beside them.
+step "Cortex-M4F under QEMU: the firmware's results have the host's bits (in the background)"
+( bash .ci/cortex-m-test.sh target/debug/twv >target/cortex-m-test.log 2>&1 ) &
+cortex_m_pid=$!
 
 step "cargo test --doc"
 cargo test --workspace --doc --profile dev "${features[@]}"
@@ -144,5 +152,8 @@ finish "the fuzz test" "$fuzz_pid" target/fuzz-test.log
 
 step "aarch64 under qemu: the NEON lanes kernel has the one-point bits, twv the same bytes (its log)"
 finish "the aarch64 test" "$aarch64_pid" target/aarch64-test.log
+
+step "Cortex-M4F under QEMU: same bits as the host, instructions per RK4 step (its log)"
+finish "the Cortex-M test" "$cortex_m_pid" target/cortex-m-test.log
 
 step "done"

@@ -25,6 +25,7 @@ pub mod api;
 pub mod audit;
 pub mod control;
 pub mod error;
+pub mod export;
 pub mod hand_file;
 pub mod hand_model;
 pub mod integrate;

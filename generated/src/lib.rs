@@ -7,6 +7,11 @@
 //! - The IR text of each model ([`ir_json`], [`MODELS`]) so a binary can embed it, and of the
 //!   shipped models that run on the interpreter ([`INTERPRETED`]: the Whipple bicycle).
 //! - [`visit`]: dispatch a model name to its concrete type without trait objects.
+//!
+//! Without its default feature `std` the crate is `no_std` (the generated kernels need only
+//! `core`): what firmware links (`twv-firmware`); `visit` and its error, which name models in
+//! allocated text, come with `std`.
+#![cfg_attr(not(feature = "std"), no_std)]
 
 twv_macros::twv_model!(ir = "ir/vehicle8.json", name = Vehicle8);
 twv_macros::twv_model!(ir = "ir/vehicle7.json", name = Vehicle7);
@@ -49,6 +54,7 @@ pub fn shipped_ir_json(name: &str) -> Option<&'static str> {
 pub use twv_model::ModelVisitor as Visitor;
 
 /// A name that is not a shipped model, or parameter values of the wrong count.
+#[cfg(feature = "std")]
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum VisitError {
     /// Not a shipped model; the known names are in [`MODELS`].
@@ -57,6 +63,7 @@ pub enum VisitError {
     ParamCount { expected: usize, given: usize },
 }
 
+#[cfg(feature = "std")]
 impl core::fmt::Display for VisitError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
@@ -74,8 +81,10 @@ impl core::fmt::Display for VisitError {
     }
 }
 
+#[cfg(feature = "std")]
 impl std::error::Error for VisitError {}
 
+#[cfg(feature = "std")]
 fn values<const NP: usize>(
     params: Option<&[f64]>,
     defaults: [f64; NP],
@@ -89,6 +98,21 @@ fn values<const NP: usize>(
     }
 }
 
+/// The IR hashes of the models with generated code, with their names.
+pub const GENERATED_HASHES: [(&str, &str); 5] = [
+    (Vehicle8::NAME, Vehicle8::IR_HASH),
+    (Vehicle7::NAME, Vehicle7::IR_HASH),
+    (Segway7::NAME, Segway7::IR_HASH),
+    (Lorenz::NAME, Lorenz::IR_HASH),
+    (HenonHeiles::NAME, HenonHeiles::IR_HASH),
+];
+
+/// Whether an IR of this hash has generated code here (the same equations as a shipped model).
+pub fn is_generated(ir_hash: &str) -> bool {
+    GENERATED_HASHES.iter().any(|(_, h)| *h == ir_hash)
+}
+
+#[cfg(feature = "std")]
 /// Run `visitor` on the runtime-parameter model called `name`, with `params` (IR order; validate
 /// them first, e.g. with `twv_ir::load_params`) or the IR defaults.
 pub fn visit<V: Visitor>(

@@ -111,19 +111,22 @@ fn run(
 /// Runs `job` with its flat options (`options`, a JSON object {name: value}: the keyword
 /// arguments of the Python function) laid over `settings` (JSON, or the defaults); returns the
 /// result as JSON, its series as CSV (or None), its summary text and the message of a negative
-/// verdict (or None).
+/// verdict (or None). With `out`, the job's files are written into that folder, as
+/// `twv <job> --out DIR` writes them.
 #[pyfunction]
-#[pyo3(signature = (job, model, options, settings = None))]
+#[pyo3(signature = (job, model, options, settings = None, out = None))]
 fn run_options(
     py: Python<'_>,
     job: &str,
     model: &Model,
     options: &str,
     settings: Option<&str>,
+    out: Option<std::path::PathBuf>,
 ) -> PyResult<(String, Option<String>, String, Option<String>)> {
     let resolved = model.resolved();
-    let out = interruptible(py, |progress| {
-        json::run_options(job, resolved, settings, options, progress)
+    let out = interruptible(py, |progress| match &out {
+        Some(dir) => json::run_options_to(job, resolved, settings, options, dir, progress),
+        None => json::run_options(job, resolved, settings, options, progress),
     })?;
     Ok((out.result, out.csv, out.summary, out.negative))
 }

@@ -77,7 +77,8 @@ def _docstring(job: dict[str, Any]) -> str:
     lines += [
         "",
         "settings: the job's whole settings as a dict (twv.settings(job)); the keywords are laid",
-        "over them. Raises InputError naming the option it refuses.",
+        "over them. out: a folder to write the job's files into, as `twv <job> --out DIR` does.",
+        "Raises InputError naming the option it refuses.",
     ]
     return "\n".join(lines)
 
@@ -92,6 +93,7 @@ def _signature(job: dict[str, Any]) -> inspect.Signature:
         if not o["required"]:
             params.append(P(o["name"], P.KEYWORD_ONLY, default=o["default"]))
     params.append(P("settings", P.KEYWORD_ONLY, default=None))
+    params.append(P("out", P.KEYWORD_ONLY, default=None))
     return inspect.Signature(params)
 
 
@@ -113,11 +115,12 @@ def _make(job: dict[str, Any]):
         given = _given(job, signature, args, kwargs)
         model = _check_model(given.pop("model"))
         settings = given.pop("settings", None)
+        out = given.pop("out", None)
         options = {k: _plain(k, _ordered(job, k, v)) for k, v in given.items()}
         options_text = json.dumps(options)
         settings_text = None if settings is None else json.dumps(_plain("settings", settings))
         raw, csv, summary, negative = _native.run_options(
-            name, model._native, options_text, settings_text
+            name, model._native, options_text, settings_text, None if out is None else str(out)
         )
         if name == "sweep":
             resolved = json.loads(_native.resolve_options(name, options_text, settings_text))

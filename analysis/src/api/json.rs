@@ -91,10 +91,33 @@ pub fn run_options(
     options_json: &str,
     progress: &dyn Progress,
 ) -> Result<Output> {
+    let done = prepare_options(job, settings_json, options_json)?.run(model, progress)?;
+    finish(done)
+}
+
+/// [`run_options`] that also writes the job's files into the folder `out`, as `twv <job> --out
+/// DIR` does (all or nothing, with the folder's manifest).
+pub fn run_options_to(
+    job: &str,
+    model: &ResolvedModel,
+    settings_json: Option<&str>,
+    options_json: &str,
+    out: &std::path::Path,
+    progress: &dyn Progress,
+) -> Result<Output> {
+    let done = prepare_options(job, settings_json, options_json)?.run(model, progress)?;
+    done.files()?.write(out)?;
+    finish(done)
+}
+
+fn prepare_options(
+    job: &str,
+    settings_json: Option<&str>,
+    options_json: &str,
+) -> Result<Box<dyn jobs::Prepared>> {
     let job = jobs::find(job)?;
     let base = settings_json.map(|t| parse("settings", t)).transpose()?;
-    let prepared = job.prepare_options(base.as_ref(), &options_of(options_json)?)?;
-    finish(prepared.run(model, progress)?)
+    job.prepare_options(base.as_ref(), &options_of(options_json)?)
 }
 
 /// The settings `job` would run with these options (pretty JSON), validated but not run.
@@ -103,12 +126,7 @@ pub fn resolve_options(
     settings_json: Option<&str>,
     options_json: &str,
 ) -> Result<String> {
-    let job = jobs::find(job)?;
-    let base = settings_json.map(|t| parse("settings", t)).transpose()?;
-    to_text(
-        &job.prepare_options(base.as_ref(), &options_of(options_json)?)?
-            .settings(),
-    )
+    to_text(&prepare_options(job, settings_json, options_json)?.settings())
 }
 
 /// The points `range` of a sweep (a shard another process computes: the Python package hands

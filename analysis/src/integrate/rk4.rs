@@ -147,13 +147,8 @@ impl<const N: usize, const K: usize> Rk4Scratch<N, K> {
     };
 }
 
-/// The equal steps from `t` to `t_stop` of at most about `h`: their number and size.
-pub(crate) fn equal_steps(rest: f64, h: f64) -> (u64, f64) {
-    // The 1e-9 slack keeps an exact multiple of h from turning into one extra tiny step
-    // through rounding.
-    let n = (rest / h * (1.0 - 1e-9)).ceil().max(1.0);
-    (n as u64, rest / n)
-}
+/// The equal steps to a stop time (shared with the export runtime's and firmware's RK4).
+pub(crate) use twv_step::equal_steps;
 
 impl<F: VectorField<N>, const N: usize, const K: usize> Stepper<N, K> for Rk4<F, N, K> {
     type Field = F;

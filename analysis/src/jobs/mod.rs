@@ -25,6 +25,7 @@ mod codegen;
 mod disturb;
 mod evaluate;
 mod exponent;
+mod export;
 pub mod groups;
 mod linearize;
 mod lyapunov;
@@ -47,6 +48,7 @@ pub use codegen::{Codegen, GeneratedCode};
 pub use disturb::{Direction, Disturb, DisturbSettings};
 pub use evaluate::Evaluate;
 pub use exponent::{exponent_verdict, Exponent, ExponentSettings, ExponentVerdict, LoopExponent};
+pub use export::{Export, Exported};
 pub use linearize::Linearize;
 pub use lyapunov::Lyapunov;
 pub use options::{Kind, Opt, OptionInfo};
@@ -327,7 +329,7 @@ macro_rules! registry {
 
 registry![
     Evaluate, Codegen, Audit, Lyapunov, Simulate, Disturb, Ride, Phase, Linearize, Steady, Tune,
-    Sweep, Exponent,
+    Sweep, Exponent, Export,
 ];
 
 /// Every job.

@@ -125,6 +125,9 @@ pub struct ResolvedModel {
     pub params_origin: String,
     /// The native code of [`Engine::Jit`].
     pub native: Option<Arc<dyn NativeCode>>,
+    /// The text of the IR, when it came from a file or is shipped (what an export carries);
+    /// `None` for an IR built in memory.
+    pub ir_text: Option<Arc<str>>,
 }
 
 /// The default parameter source of a shipped vehicle: `paper` (the text of vehicles/paper.toml)
@@ -173,19 +176,25 @@ impl ModelSpec {
 
     /// Reads and validates the IR and the parameters; errors name the file and the field.
     pub fn resolve(&self) -> Result<ResolvedModel> {
-        let (engine, origin, ir) = match &self.model {
+        let (engine, origin, ir, ir_text) = match &self.model {
             ModelSource::Shipped(name) => {
                 let file = format!("generated/ir/{name}.json");
                 let interpreted = twv_generated::INTERPRETED.iter().find(|(n, _)| n == name);
                 match (twv_generated::ir_json(name), interpreted) {
                     (Some(text), _) => {
                         let ir = twv_ir::parse_ir(text, &file)?;
-                        (Engine::Generated(name.clone()), file, ir)
+                        (
+                            Engine::Generated(name.clone()),
+                            file,
+                            ir,
+                            Some(Arc::from(text)),
+                        )
                     }
                     (None, Some((_, text))) => (
                         Engine::Interpreted,
                         file.clone(),
                         twv_ir::parse_ir(text, &file)?,
+                        Some(Arc::from(*text)),
                     ),
                     (None, None) => {
                         return Err(Error::UnknownModel {
@@ -195,12 +204,21 @@ impl ModelSpec {
                     }
                 }
             }
-            ModelSource::IrFile(path) => (
+            ModelSource::IrFile(path) => {
+                let file = path.display().to_string();
+                let text = std::fs::read_to_string(path).map_err(|e| twv_ir::IrError {
+                    file: file.clone(),
+                    problem: twv_ir::Problem::Io(e.to_string()),
+                })?;
+                let ir = twv_ir::parse_ir(&text, &file)?;
+                (Engine::Interpreted, file, ir, Some(Arc::from(text)))
+            }
+            ModelSource::Ir(ir) => (
                 Engine::Interpreted,
-                path.display().to_string(),
-                twv_ir::load_ir(path)?,
+                ir.file().to_string(),
+                (**ir).clone(),
+                None,
             ),
-            ModelSource::Ir(ir) => (Engine::Interpreted, ir.file().to_string(), (**ir).clone()),
         };
         let (params, params_origin) = match &self.params {
             ParamSource::Defaults => (
@@ -230,6 +248,7 @@ impl ModelSpec {
             params,
             params_origin,
             native,
+            ir_text,
         })
     }
 }

@@ -12,7 +12,12 @@ pub const HASH_PLACEHOLDER: &str =
 
 /// `sha256:<hex>` of a text that holds the placeholder where the hash goes.
 pub fn sha256_hex(text: &str) -> String {
-    let digest = Sha256::digest(text.as_bytes());
+    sha256_hex_bytes(text.as_bytes())
+}
+
+/// `sha256:<hex>` of bytes.
+pub fn sha256_hex_bytes(bytes: &[u8]) -> String {
+    let digest = Sha256::digest(bytes);
     let hex: String = digest.iter().map(|b| format!("{b:02x}")).collect();
     format!("sha256:{hex}")
 }

@@ -5,7 +5,9 @@
 //! - [`load_params`] / [`parse_params`]: a TOML parameter file into values in the IR's order,
 //!   validated by each parameter's kind ([`ParamError`]).
 //! - [`Function::eval`] and [`Interpreted`]: the interpreter, bit-identical to the generated code.
+//! - [`Bundle`]: an IR with its parameter values, as an exported library carries it.
 
+mod bundle;
 mod consistency;
 mod error;
 mod hash;
@@ -19,11 +21,15 @@ mod types;
 mod unique_keys;
 mod validate;
 
+pub use bundle::{
+    Bundle, BundleError, ValueReferences, Variable, BUNDLE_FORMAT, FMU_RESOURCE, MAX_BUNDLE_BYTES,
+    TRAILER_MAGIC,
+};
 pub use error::{
     InstrProblem, IrError, ModelError, OutputProblem, ParamError, ParamProblem, Problem,
     WorkTooShort,
 };
-pub use hash::{content_hash, rehash, sha256_hex, HASH_PLACEHOLDER};
+pub use hash::{content_hash, rehash, sha256_hex, sha256_hex_bytes, HASH_PLACEHOLDER};
 pub use infix::{formulas, Formulas};
 pub use interp::{visit_interpreted, Interpreted, UnsupportedSize, VisitError, MAX_NU, MAX_NX};
 pub use native::NativeCode;

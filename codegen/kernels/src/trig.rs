@@ -89,6 +89,8 @@ macro_rules! unreduced {
         (s, add(w, add(sub(sub(k(1.0), w), hz), wq)))
     }};
 }
+// Used by the lanes kernels of the CPUs with vector builds (x86-64, aarch64).
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 pub(crate) use unreduced;
 
 /// `(sin(x + y), cos(x + y))` for |x| ≲ π/4 and a tail |y| ≤ ulp(x)/2, after a reduction,
@@ -120,6 +122,8 @@ macro_rules! tailed {
         (s, add(w, add(sub(sub(k(1.0), w), hz), sub(wq, mul(x, y)))))
     }};
 }
+// Used by the lanes kernels of the CPUs with vector builds (x86-64, aarch64).
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 pub(crate) use tailed;
 
 /// The rounds of [`reduce`] for several lanes at once, written with the given `sub`, `mul`,
@@ -127,6 +131,7 @@ pub(crate) use tailed;
 /// its order: every lane takes all three rounds and keeps the one its scalar call stops at.
 /// `beyond(y, bits)` is the mask of the lanes where x's exponent exceeds y's by more than
 /// `bits`, `and` joins two masks, `select(m, a, b)` is `m ? b : a` per lane. Returns (y0, y1).
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 macro_rules! all_rounds {
     ($sub:expr, $mul:expr, $k:expr, $x:expr, $fnum:expr, $beyond:expr, $and:expr, $select:expr) => {{
         let (sub, mul, k, x, fnum) = ($sub, $mul, $k, $x, $fnum);
@@ -149,6 +154,8 @@ macro_rules! all_rounds {
         (y0, sub(sub(r, y0), w))
     }};
 }
+// Used by the lanes kernels of the CPUs with vector builds (x86-64, aarch64).
+#[cfg(any(target_arch = "x86_64", target_arch = "aarch64"))]
 pub(crate) use all_rounds;
 
 /// The coefficients of the no-tail sine's polynomial: sin x = x + x³·P(x²).

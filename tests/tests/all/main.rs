@@ -11,6 +11,7 @@ mod bicycle_runs;
 mod codegen;
 mod control;
 mod docs;
+mod firmware;
 mod hand_file;
 mod hand_model;
 mod isa;
