@@ -14,7 +14,8 @@
 # Every result must have the same bits on all three; the emulator's instruction counts per RK4
 # step and per f, and the code size, are printed (an estimate of cycles, named as such).
 #
-#   bash .ci/cortex-m-test.sh [path/to/twv]   (default target/debug/twv)
+#   bash .ci/cortex-m-test.sh [path/to/twv]   (default target/debug/twv; the host's case and
+#                                              static library from the same folder)
 #   bash .ci/cortex-m-test.sh --install-only  (qemu-system-arm and the library source only)
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -52,11 +53,16 @@ echo "case: $case_text"
 work="$(mktemp -d /tmp/twv-cortex-m.XXXXXX)"
 trap 'rm -rf "$work"' EXIT
 
-# Host: Rust and C.
-cargo build -q -p twv-firmware --lib --example case
-target/debug/examples/case "$case_text" >"$work/host.txt"
+# Host: Rust and C, from the build twv came from (the test command's `cargo build --workspace
+# --lib` made both), else built here.
+built="$(dirname "$twv")"
+if [ ! -x "$built/examples/case" ] || [ ! -f "$built/libtwv_firmware.a" ]; then
+    cargo build -q -p twv-firmware --lib --example case
+    built=target/debug
+fi
+"$built/examples/case" "$case_text" >"$work/host.txt"
 gcc -std=c11 -O2 -Wall -Wextra -Werror -I firmware/include firmware/c/check.c \
-    target/debug/libtwv_firmware.a -lpthread -ldl -lm -o "$work/check"
+    "$built/libtwv_firmware.a" -lpthread -ldl -lm -o "$work/check"
 "$work/check" "$kp" "$kd" "$amplitude" "$f_max" "$h" "$steps" "${x0[@]}" "${u[@]}" >"$work/c.txt"
 
 # Cortex-M4F, the program linted as the workspace is (clippy-driver, -D warnings).

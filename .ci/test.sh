@@ -43,6 +43,12 @@ mkdir -p target
     >target/slurm-install.log 2>&1 &
 slurm_install_pid=$!
 
+# The book (mdBook, installed pinned into target/tools the first time, ~2 min 40 s of one core)
+# and its links: it needs nothing of the Rust build, so it starts first, beside the builds.
+step "docs: the book builds and every link resolves (in the background)"
+( bash .ci/docs-test.sh >target/docs-test.log 2>&1 ) &
+docs_pid=$!
+
 step "pytest modeling/"
 # Two workers, each test module on one (its derived models are cached per process): ~37 s -> ~24 s.
 "$py" -m pytest -q -p no:cacheprovider -n 2 --dist loadfile modeling/tests
@@ -57,33 +63,32 @@ cargo fmt --manifest-path firmware/qemu/Cargo.toml --check
 
 # One build of every target, linted: clippy-driver compiles the workspace crates with -D warnings
 # (the lints of `cargo clippy --workspace --all-targets -- -D warnings`, see .ci/clippy-rustc), so
-# the code is linted and built once instead of checked and then built. The dev profile for the
-# tests too (not cargo's separate `test` profile), so that the Python extension below reuses
-# every compiled crate instead of building them all again; it inherits the wrapper.
-step "cargo build of every target with clippy's lints (-D warnings)"
+# the code is linted and built once instead of checked and then built. In the release profile,
+# tests too: the Python package in .venv must be the optimised build, and maturin below then
+# reuses every compiled crate of this build (18 s) instead of building the analysis stack a
+# second time (10-13 min on 2 cores when the tests were built in the dev profile). `--lib`
+# builds the libraries no test links: the export runtime (libtwv_export.so) and the firmware's
+# static library.
+step "cargo build of every target in the release profile, with clippy's lints (-D warnings)"
 TWV_CLIPPY_DRIVER="$(rustup which clippy-driver 2>/dev/null || command -v clippy-driver)"
 export TWV_CLIPPY_DRIVER
 export RUSTC_WORKSPACE_WRAPPER="$PWD/.ci/clippy-rustc"
-# The `twv` of the tests has the JIT (`--runtime jit`, a cargo feature the release build leaves
-# out: see analysis/cli/Cargo.toml); every cargo command below names it, so none rebuilds.
+# The `twv` of the tests has the JIT (`--runtime jit`, a cargo feature the main command's build
+# leaves out: see analysis/cli/Cargo.toml); every cargo command below names it, so none rebuilds.
 features=(--features twv-cli/jit)
-cargo test --workspace --no-run --profile dev "${features[@]}"
-cargo build --workspace --benches --profile dev "${features[@]}"
-
-# Code that only release builds compile (the RK4 steps' AVX2 and AVX-512 builds,
-# `not(debug_assertions)`): type-checked and linted too, or a release-only error would first
-# show in the main command (~30 s).
-step "cargo check --release of the release-only code, with clippy's lints"
-cargo check --release -p twv-analysis --lib
+profile=(--profile release)
+cargo test --workspace --no-run "${profile[@]}" "${features[@]}"
+cargo build --workspace --lib --benches "${profile[@]}" "${features[@]}"
+twv="$PWD/target/release/twv"
 
 # trybuild's compile-fail case builds the proc-macro's dependencies in a target folder of its
 # own (~50 s of one core): it runs in the background beside the doc tests and the Python
 # package, where a core is idle, instead of inside nextest. Both runs name what they ran.
 step "cargo nextest (every test binary, in parallel; the compile-fail case in the background)"
 compile_fail='test(=macro_errors_are_compile_errors)'
-cargo nextest run --workspace --cargo-profile dev "${features[@]}" --no-fail-fast \
+cargo nextest run --workspace --cargo-profile release "${features[@]}" --no-fail-fast \
     -E "not $compile_fail"
-( cargo nextest run -p twv-macros --cargo-profile dev -E "$compile_fail" \
+( cargo nextest run -p twv-macros --cargo-profile release -E "$compile_fail" \
     >target/compile-fail-test.log 2>&1 ) &
 compile_fail_pid=$!
 
@@ -94,33 +99,27 @@ if ! wait "$slurm_install_pid"; then
     echo "installing Slurm, MUNGE, Chromium, the aarch64 cross tools or QEMU for Arm failed"
     exit 1
 fi
-( bash .ci/slurm-test.sh target/debug/twv >target/slurm-test.log 2>&1 ) &
+( bash .ci/slurm-test.sh "$twv" >target/slurm-test.log 2>&1 ) &
 slurm_pid=$!
 
 # The browser test mostly waits on Chromium and the server: beside them too.
 step "twv serve in a real browser: headless Chromium through WebDriver (in the background)"
-( bash .ci/browser-test.sh target/debug/twv >target/browser-test.log 2>&1 ) &
+( bash .ci/browser-test.sh "$twv" >target/browser-test.log 2>&1 ) &
 browser_pid=$!
 
 # The aarch64 cross build and its emulated tests: beside the doc tests and the Python package,
 # which leave a core idle much of the time.
 step "aarch64: cross-build for aarch64, run the NEON tests under qemu (in the background)"
-( bash .ci/aarch64-test.sh target/debug/twv >target/aarch64-test.log 2>&1 ) &
+( bash .ci/aarch64-test.sh "$twv" >target/aarch64-test.log 2>&1 ) &
 aarch64_pid=$!
 
 # The firmware crate built for a Cortex-M4F and run under QEMU's system emulation: beside them.
 step "Cortex-M4F under QEMU: the firmware's results have the host's bits (in the background)"
-( bash .ci/cortex-m-test.sh target/debug/twv >target/cortex-m-test.log 2>&1 ) &
+( bash .ci/cortex-m-test.sh "$twv" >target/cortex-m-test.log 2>&1 ) &
 cortex_m_pid=$!
 
 step "cargo test --doc"
-cargo test --workspace --doc --profile dev "${features[@]}"
-
-# The book (mdBook, installed pinned into target/tools the first time) and its links: beside the
-# Python package's release build.
-step "docs: the book builds and every link resolves (in the background)"
-( bash .ci/docs-test.sh >target/docs-test.log 2>&1 ) &
-docs_pid=$!
+cargo test --workspace --doc "${profile[@]}" "${features[@]}"
 
 # The fuzz targets, built with coverage instrumentation into target/fuzz/ (a build of their own),
 # a fixed number of runs each: beside the Python package too.
@@ -128,12 +127,13 @@ step "fuzzing: every fuzz target, a fixed number of runs from its corpus (in the
 ( TWV_FUZZ_RUNS=100000 bash .ci/fuzz.sh >target/fuzz-test.log 2>&1 ) &
 fuzz_pid=$!
 
-step "python package: a release build of the extension into .venv (maturin), pytest python/tests"
+step "python package: the release build of the extension into .venv (maturin), pytest python/tests"
 # --release: the package a user finds in .venv is the optimised one (a debug build ran a 20 x 20
-# map ~20 times slower than the CLI); its tests check that it is (TWV_EXPECT_PROFILE). --uv: the
-# .venv's pinned uv installs the extension (pip resolving its dependencies took ~20 s).
+# map ~20 times slower than the CLI); its tests check that it is (TWV_EXPECT_PROFILE). It reuses
+# the release build above. --uv: the .venv's pinned uv installs the extension (pip resolving its
+# dependencies took ~20 s).
 PATH="$PWD/.venv/bin:$PATH" VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release --uv --quiet -m python/Cargo.toml
-TWV_BIN="$PWD/target/debug/twv" TWV_EXPECT_PROFILE=release "$py" -m pytest -q -p no:cacheprovider python/tests
+TWV_BIN="$twv" TWV_EXPECT_PROFILE=release "$py" -m pytest -q -p no:cacheprovider python/tests
 
 step "the browser test: the page's plots and margins are the CLI's for the dragged gains (its log)"
 finish "the browser test" "$browser_pid" target/browser-test.log
