@@ -40,6 +40,29 @@ fn wait_within(mut child: std::process::Child, limit: Duration, what: &str) -> O
     }
 }
 
+/// Waits until `child` has used `cpu` of processor time (user + system, from /proc), so that a
+/// signal sent next lands in the middle of its work however fast the build or busy the machine
+/// is (a 40 × 40 map is about a second of work in the release build). At most 60 s.
+fn busy_for(child: &std::process::Child, cpu: Duration) {
+    let stat = format!("/proc/{}/stat", child.id());
+    let tick = 0.01; // USER_HZ: 100 on Linux
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(60) {
+        let used = std::fs::read_to_string(&stat).ok().and_then(|text| {
+            // Fields after the command's closing parenthesis: state is the first, utime the
+            // 12th and stime the 13th.
+            let rest = &text[text.rfind(')')? + 2..];
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) * tick)
+        });
+        match used {
+            Some(seconds) if seconds >= cpu.as_secs_f64() => return,
+            None => return, // it has ended: the caller's checks say how
+            _ => std::thread::sleep(Duration::from_millis(5)),
+        }
+    }
+}
+
 fn scratch(name: &str) -> common::Scratch {
     common::scratch("hostile", name)
 }
@@ -269,9 +292,9 @@ fn an_interrupted_sweep_resumes() {
     let base = scratch("sigint");
     let grid = [
         "--kp",
-        "800:8000:12",
+        "800:8000:40",
         "--kd",
-        "200:4000:12",
+        "200:4000:40",
         "--metric",
         "max-lyapunov",
         "--quiet",
@@ -289,7 +312,8 @@ fn an_interrupted_sweep_resumes() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(Duration::from_millis(400));
+    // Interrupted once it has computed for a while, whatever the build's speed.
+    busy_for(&child, Duration::from_millis(150));
     let pid = child.id().to_string();
     assert!(Command::new("kill")
         .args(["-INT", &pid])
@@ -438,6 +462,7 @@ fn messages_name_real_options_and_readable_numbers() {
 /// A second Ctrl-C right after the first, while the sweep finishes its chunk and writes its
 /// checkpoint: the checkpoint is written whole and renamed into place before twv exits, and no
 /// temporary file is left (issue 38: all progress was lost).
+
 #[test]
 fn a_second_ctrl_c_during_the_checkpoint_keeps_it() {
     let dir = scratch("second-sigint");
@@ -458,7 +483,7 @@ fn a_second_ctrl_c_during_the_checkpoint_keeps_it() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(Duration::from_millis(1500));
+    busy_for(&child, Duration::from_millis(300));
     let pid = child.id().to_string();
     for pause in [50, 0] {
         assert!(Command::new("kill")

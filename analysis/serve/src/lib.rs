@@ -297,7 +297,7 @@ impl Server {
             (503, Some(Stop::TimeLimit)) => Reply::error(
                 413,
                 format!(
-                    "the job ran past this server's time limit of {:.0} s and was stopped (ask \
+                    "the job ran past this server's time limit of {} s and was stopped (ask \
                      for less work: fewer points, a shorter run, fewer iterations)",
                     self.settings.time_limit.as_secs_f64()
                 ),

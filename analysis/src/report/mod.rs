@@ -21,7 +21,7 @@ pub use findings::{
     pd_exponents_claim, recovery_claim, recovery_finding, trace_check, tune_finding, Check, Claim,
     Finding, DRIFT_TOLERANCE, TRACE_TOLERANCE,
 };
-pub use html::{svg_size, Figure, Page};
+pub use html::{svg_size, Figure, Page, PAGE_PADDING, PAGE_WIDTH};
 
 use crate::api::{LinearReport, PhaseResult, Progress, SimResult, SpectrumResult, TuneReport};
 use crate::audit::{AuditReport, AuditSettings};
@@ -142,7 +142,7 @@ pub fn build(settings: &ReportSettings, progress: &dyn Progress) -> Result<Repor
     let mut results = result?;
     results.wall_time_s = start.elapsed().as_secs_f64();
     results.machine = crate::machine::describe();
-    let (html, figures) = sections::page(settings, &results)?;
+    let (html, figures) = sections::page(settings, &results, progress)?;
     let mut files = Files::new();
     for f in &figures {
         files.text(&f.file, f.svg.clone());

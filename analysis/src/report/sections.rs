@@ -16,7 +16,7 @@ use crate::api::{
 };
 use crate::audit::AuditSettings;
 use crate::control::{ControllerSettings, RunSettings, STUDY_PD};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::lyapunov::{InitialBasis, LyapunovSettings};
 use crate::model::{ModelSource, ModelSpec, ResolvedModel};
 use crate::sweep::{Grid, Metric, PointResult};
@@ -283,7 +283,17 @@ fn sci(v: f64) -> String {
     format!("{v:.3e}")
 }
 
-fn figure(file: &str, figure: crate::plot::Figure, caption: &str) -> Result<Figure> {
+/// A figure drawn as SVG and PNG — unless the run was cancelled: drawing the figures is most
+/// of a report's time in a release build, so a Ctrl-C is looked at before each one.
+fn figure(
+    progress: &dyn Progress,
+    file: &str,
+    figure: crate::plot::Figure,
+    caption: &str,
+) -> Result<Figure> {
+    if progress.cancelled() {
+        return Err(Error::Interrupted);
+    }
     Ok(Figure {
         file: format!("figures/{file}"),
         svg: figure.svg()?,
@@ -293,7 +303,11 @@ fn figure(file: &str, figure: crate::plot::Figure, caption: &str) -> Result<Figu
 }
 
 /// The page and its figures.
-pub fn page(settings: &ReportSettings, r: &ReportResults) -> Result<(String, Vec<Figure>)> {
+pub fn page(
+    settings: &ReportSettings,
+    r: &ReportResults,
+    progress: &dyn Progress,
+) -> Result<(String, Vec<Figure>)> {
     let mut page = Page::default();
     let mut figures = Vec::new();
     let mut add = |page: &mut Page, fig: Figure| {
@@ -377,6 +391,7 @@ pub fn page(settings: &ReportSettings, r: &ReportResults) -> Result<(String, Vec
     add(
         &mut page,
         figure(
+            progress,
             "lyapunov_running.svg",
             preset.running_figure(),
             "Running estimates of the exponents (study preset).",
@@ -475,6 +490,7 @@ pub fn page(settings: &ReportSettings, r: &ReportResults) -> Result<(String, Vec
     add(
         &mut page,
         figure(
+            progress,
             "phase.svg",
             r.phase.combined_figure(2),
             "Phase portraits (Φ, dΦ/dt) for gain sets (a)–(d).",
@@ -526,7 +542,7 @@ pub fn page(settings: &ReportSettings, r: &ReportResults) -> Result<(String, Vec
                 let caption = format!("{}: {}", sim.scenario, file.trim_end_matches(".svg"));
                 add(
                     &mut page,
-                    figure(&format!("{prefix}_{file}"), fig, &caption)?,
+                    figure(progress, &format!("{prefix}_{file}"), fig, &caption)?,
                 );
             }
         }
@@ -591,6 +607,7 @@ pub fn page(settings: &ReportSettings, r: &ReportResults) -> Result<(String, Vec
         add(
             &mut page,
             figure(
+                progress,
                 &format!("map_{file}"),
                 fig,
                 "Spectral abscissa of the pitch loop over (Kp, Kd); the line is the stability \
