@@ -478,7 +478,9 @@ impl SimResult {
             }
         );
         if let RunEnd::Fell { t, phi } = self.end {
-            s += &format!("  fell over at t = {t:.3} s (Φ = {phi:.3} rad)\n");
+            s += &crate::error::readable_numbers(&format!(
+                "  fell over at t = {t:.3} s (Φ = {phi:.3} rad)\n"
+            ));
         }
         s += &format!(
             "  Φ: settling (2 %) {}, overshoot {}, IAE {:.4} rad s, ISE {:.4e} rad² s, final {:+.3e} rad\n",

@@ -96,7 +96,8 @@ impl RunSettings {
 pub enum RunEnd {
     /// Reached t_end.
     Completed,
-    /// |Φ| passed the fall angle at the sample time `t`.
+    /// |Φ| passed the fall angle at the sample time `t` (or the state blew up, from time `t`,
+    /// after passing it between two samples).
     Fell {
         /// Time of the first sample past the fall angle [s].
         t: f64,
@@ -129,7 +130,10 @@ impl<const N: usize> Trajectory<N> {
 }
 
 /// Integrates `field` from `x0` at t = 0 and samples it every `run.sample` seconds; `phi` is the
-/// index of Φ for the fall check. A blow-up is an error naming the time and the state.
+/// index of Φ for the fall check. A blow-up is an error naming the time and the state, unless
+/// Φ had passed the fall angle by its last finite state: a model that has fallen between two
+/// samples may blow up (the bicycle's contact geometry degenerates lying flat), and that is
+/// the fall the run stops at anyway.
 pub fn simulate<F, const N: usize>(
     field: F,
     x0: &[f64; N],
@@ -183,7 +187,19 @@ fn sample<S: Stepper<N, 0>, const N: usize>(
         } else {
             i as f64 * run.sample
         };
-        stepper.advance_to(t)?;
+        match stepper.advance_to(t) {
+            Ok(()) => {}
+            Err(crate::integrate::IntegrateError::BlowUp { t, x, .. })
+                if run
+                    .fall_angle
+                    .zip(x.get(phi))
+                    .is_some_and(|(limit, p)| p.abs() > limit) =>
+            {
+                traj.end = RunEnd::Fell { t, phi: x[phi] };
+                break;
+            }
+            Err(e) => return Err(e.into()),
+        }
         if i % every == 0 {
             progress.advance(every as u64);
             if progress.cancelled() {

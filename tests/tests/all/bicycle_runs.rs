@@ -43,6 +43,31 @@ fn push(speed: f64) -> RideSettings {
     }
 }
 
+/// With the default fall angle (π/2) a falling bicycle's state blows up between two samples
+/// (its contact geometry degenerates lying flat): that is the fall, with its time, not an error.
+#[test]
+fn a_bicycle_that_blows_up_after_passing_the_fall_angle_fell() {
+    let model = bicycle();
+    let s = RideSettings {
+        speed: Some(3.0),
+        perturb: BTreeMap::from([("w_phi".to_string(), 0.5)]),
+        ..RideSettings::default()
+    };
+    let r = ride(&model, &s, &Silent).unwrap();
+    assert_eq!(r.verdict, RideVerdict::Fell, "{}", r.summary());
+    let RunEnd::Fell { t, phi } = r.end else {
+        panic!("{:?}", r.end)
+    };
+    assert!(t > 0.0 && t < 10.0 && phi.abs() > std::f64::consts::FRAC_PI_2);
+    assert!(
+        r.summary().contains("FELL") && !r.summary().contains("NaN"),
+        "{}",
+        r.summary()
+    );
+    // Every sample kept is finite.
+    assert!(r.rows.iter().flatten().all(|v| v.is_finite()));
+}
+
 #[test]
 fn an_uncontrolled_bicycle_recovers_inside_the_self_stable_range_and_falls_outside() {
     let model = bicycle();
