@@ -283,6 +283,61 @@ class TuneResult(Result):
         return None if cert is None else Gains(**cert["gains"])
 
 
+class SteerResult(Result):
+    """A steer controller over speed (`twv.steer`): per speed the gains (tuned or given), the
+    closed loop's eigenvalues and margins at the steer torque, the nonlinear check, and whether
+    the spec was `met` there."""
+
+    _GAINS = ("k_phi", "k_delta", "k_phi_dot", "k_delta_dot")
+
+    @property
+    def speeds(self) -> np.ndarray:
+        return np.array([p["speed"] for p in self.raw["points"]])
+
+    @property
+    def gains(self) -> np.ndarray:
+        """[speed, gain] in the order k_phi, k_delta, k_phi_dot, k_delta_dot (NaN where no
+        stabilising gains were found)."""
+        rows = []
+        for p in self.raw["points"]:
+            cert = p["certificate"]
+            rows.append([np.nan] * 4 if cert is None else [cert["gains"][k] for k in self._GAINS])
+        return np.array(rows, dtype=float).reshape(-1, 4)
+
+    @property
+    def met(self) -> np.ndarray:
+        """Per speed: the certificate meets the spec and the push is recovered from."""
+        return np.array([p["met"] for p in self.raw["points"]], dtype=bool)
+
+    @property
+    def closed_loop_eigenvalues(self) -> list[np.ndarray]:
+        """Per speed, the steered loop's complex eigenvalues [1/s] (empty without gains)."""
+        out = []
+        for p in self.raw["points"]:
+            cert = p["certificate"]
+            ev = [] if cert is None else cert["analysis"]["closed_loop"]["eigenvalues"]
+            out.append(_complex(ev))
+        return out
+
+    @property
+    def open_loop_eigenvalues(self) -> list[np.ndarray]:
+        """Per speed, the eigenvalues of the bicycle nobody steers [1/s]."""
+        return [_complex(p["open_loop"]) for p in self.raw["points"]]
+
+    def to_pandas(self):
+        """One row per speed: the gains, whether met, the disk phase margin [deg]."""
+        data = {"speed": self.speeds, "met": self.met}
+        for j, name in enumerate(self._GAINS):
+            data[name] = self.gains[:, j]
+        data["disk_phase_margin_deg"] = [
+            np.nan
+            if p["certificate"] is None
+            else p["certificate"]["analysis"]["margins"]["disk"]["phase_deg"]
+            for p in self.raw["points"]
+        ]
+        return _pandas().DataFrame(data)
+
+
 class ExponentResult(Result):
     """The closed loop's largest exponent over a short horizon: `value` [1/s], `resolution`
     [1/s] and the `verdict` (stable, unstable, undecided, fell, failed)."""
@@ -365,6 +420,7 @@ RESULTS: dict[str, type[Result]] = {
     "ride": RideResult,
     "linearize": LinearResult,
     "steady": SteadyResult,
+    "steer": SteerResult,
     "tune": TuneResult,
     "exponent": ExponentResult,
 }

@@ -29,6 +29,7 @@ mod ride;
 mod simulate;
 mod spectrum;
 mod steady;
+mod steer;
 mod sweep;
 mod tune;
 
@@ -52,8 +53,11 @@ pub use simulate::{
 };
 pub use spectrum::{drift_states, spectrum, SpectrumResult, SpectrumSettings, Timing};
 pub use steady::{
-    steady_motion, steady_state, Crossing, SpeedPoint, StableRange, SteadyResult, SteadySettings,
-    SteadyVerdict, MAX_SPEEDS,
+    modal_plant, steady_motion, steady_state, Crossing, ModalPlant, SpeedPoint, StableRange,
+    SteadyResult, SteadySettings, SteadyVerdict, MAX_SPEEDS,
+};
+pub use steer::{
+    steer, steer_loop, SteerLoopSettings, SteerPoint, SteerResult, SteerVerdict, SteeredRide,
 };
 pub use sweep::{
     compute_points, run_shard, status_counts, sweep, Computed, ShardOptions, ShardOutcome,

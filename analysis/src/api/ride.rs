@@ -1,16 +1,18 @@
-//! An uncontrolled run: the model under constant inputs from a state, or from its steady motion
-//! at a speed with some states pushed — `twv ride`. What the bicycle does when nobody steers:
-//! inside its self-stable speed range a small push in lean dies out, outside it grows into a
-//! fall. The verdict is computed from the run with the thresholds below.
+//! A run under constant inputs from a state, or from its steady motion at a speed with some
+//! states pushed — `twv ride`. What the bicycle does when nobody steers: inside its self-stable
+//! speed range a small push in lean dies out, outside it grows into a fall; and what it does
+//! when a steer controller ([`SteerSettings`]) steers it. The verdict is computed from the run
+//! with the thresholds below.
 
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 use twv_model::Model;
 
+use crate::control::steer::{SteerLaw, SteerSettings};
 use crate::control::{simulate as integrate, RunEnd, RunSettings};
 use crate::error::{Error, Result};
-use crate::integrate::OpenLoop;
+use crate::integrate::{ClosedLoop, OpenLoop};
 use crate::model::{dispatch, input_vector, state_vector, ModelTask, ResolvedModel};
 use crate::output::Files;
 use crate::plot::{Curve, Figure, LineChart};
@@ -23,7 +25,7 @@ pub const RIDE_TAIL: f64 = 0.1;
 /// this fraction of the largest over the whole run: the disturbance has died out to a tenth.
 pub const RIDE_DECAY: f64 = 0.1;
 
-/// An uncontrolled run. Defaults beside each field.
+/// A run under constant inputs, steered or not. Defaults beside each field.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RideSettings {
@@ -36,6 +38,9 @@ pub struct RideSettings {
     pub perturb: BTreeMap<String, f64>,
     /// Constant inputs in the model's order. Default all zero.
     pub u: Option<Vec<f64>>,
+    /// A steer-torque law on the model's steer input (two-wheelers with one: the bicycle).
+    /// Default none: not steered.
+    pub steer: Option<SteerSettings>,
     /// The state whose decay is judged and whose size stops the run (`run.fall_angle`).
     /// Default `phi` (the bicycle's lean, the vehicles' pitch).
     pub watch: String,
@@ -51,6 +56,7 @@ impl Default for RideSettings {
             speed: None,
             perturb: BTreeMap::new(),
             u: None,
+            steer: None,
             watch: "phi".into(),
             run: RunSettings::default(),
         }
@@ -71,6 +77,9 @@ impl RideSettings {
                     "give either an initial state (x0) or a speed, not both",
                 ));
             }
+        }
+        if let Some(law) = &self.steer {
+            law.validate()?;
         }
         for (name, v) in &self.perturb {
             if !v.is_finite() {
@@ -99,7 +108,7 @@ pub enum RideVerdict {
     Undisturbed,
 }
 
-/// One uncontrolled run.
+/// One run.
 #[derive(Debug, Clone, Serialize)]
 pub struct RideResult {
     pub model: String,
@@ -108,6 +117,8 @@ pub struct RideResult {
     pub x0: Vec<f64>,
     pub u: Vec<f64>,
     pub speed: Option<f64>,
+    /// The steer-torque law, when steered.
+    pub steer: Option<SteerSettings>,
     pub watch: String,
     pub run: RunSettings,
     pub end: RunEnd,
@@ -195,7 +206,25 @@ impl ModelTask for Ride<'_> {
         let x0: [f64; NX] = state_vector("x0", &initial_state(resolved, s)?, info.states)?;
         let u_given = s.u.clone().unwrap_or_else(|| vec![0.0; info.inputs.len()]);
         let u: [f64; NU] = input_vector("u", &u_given, info.inputs)?;
-        let traj = integrate(OpenLoop::new(model, u), &x0, watch, &s.run, self.1)?;
+        let traj = match &s.steer {
+            None => integrate(OpenLoop::new(model, u), &x0, watch, &s.run, self.1)?,
+            Some(settings) => {
+                let modes = resolved
+                    .ir
+                    .mechanics()
+                    .and_then(|m| m.steady_motion.as_ref())
+                    .map_or_else(Vec::new, |m| m.modes.clone());
+                let law = SteerLaw::<NX, NU>::new(
+                    resolved.name(),
+                    info.states,
+                    info.inputs,
+                    &modes,
+                    settings,
+                    u,
+                )?;
+                integrate(ClosedLoop::new(model, law), &x0, watch, &s.run, self.1)?
+            }
+        };
         let watched = traj.component(watch);
         let (verdict, peak, tail_peak) = ride_verdict(&traj.end, &watched);
         let mut columns = vec!["t".to_string()];
@@ -212,6 +241,7 @@ impl ModelTask for Ride<'_> {
             x0: x0.to_vec(),
             u: u_given,
             speed: s.speed,
+            steer: s.steer,
             watch: s.watch.clone(),
             run: s.run,
             end: traj.end,
@@ -226,7 +256,7 @@ impl ModelTask for Ride<'_> {
     }
 }
 
-/// Runs the model uncontrolled under `settings`.
+/// Runs the model under `settings`.
 pub fn ride(
     model: &ResolvedModel,
     settings: &RideSettings,
@@ -253,7 +283,7 @@ impl RideResult {
                 let points: Vec<(f64, f64)> = self.rows.iter().map(|r| (r[0], r[i])).collect();
                 let first = points[0].1;
                 points.iter().any(|p| p.1 != first).then(|| {
-                    let title = format!("{} uncontrolled — {name}", self.model);
+                    let title = format!("{} {} — {name}", self.model, self.how());
                     let curve = Curve {
                         name: name.clone(),
                         points,
@@ -274,6 +304,15 @@ impl RideResult {
             f.figure(&name, &figure)?;
         }
         Ok(f)
+    }
+
+    /// "steered" or "uncontrolled".
+    fn how(&self) -> &'static str {
+        if self.steer.is_some() {
+            "steered"
+        } else {
+            "uncontrolled"
+        }
     }
 
     /// A few readable lines with the verdict and its threshold.
@@ -300,18 +339,21 @@ impl RideResult {
                 self.peak
             ),
             RideVerdict::Fell => match self.end {
-                RunEnd::Fell { t, phi } => format!(
+                RunEnd::Fell { t, phi } => crate::error::readable_numbers(&format!(
                     "FELL: |{}| passed {} at t = {t:.3} s ({phi:+.3})",
                     self.watch,
                     self.run.fall_angle.unwrap_or(f64::INFINITY)
-                ),
+                )),
                 RunEnd::Completed => "FELL".to_string(),
             },
             RideVerdict::Undisturbed => format!("{} stayed at zero: undisturbed", self.watch),
         };
         format!(
-            "{} uncontrolled {start}, {} s ({}): {verdict}\n",
-            self.model, self.run.t_end, self.params
+            "{} {} {start}, {} s ({}): {verdict}\n",
+            self.model,
+            self.how(),
+            self.run.t_end,
+            self.params
         )
     }
 }

@@ -190,6 +190,54 @@ pub fn steady_state(model: &ResolvedModel, speed: f64) -> Result<Vec<f64>> {
     Ok(Motion::of(model)?.state(speed))
 }
 
+/// The model linearised about its steady motion at `speed`, restricted to the studied modes:
+/// ẋ = A x + B u on the modes (the bicycle's lean, steer and their rates), with every input.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModalPlant {
+    /// The speed [m/s].
+    pub speed: f64,
+    /// The studied states, in the IR's order.
+    pub modes: Vec<String>,
+    /// ∂f/∂x restricted to the modes (rows and columns).
+    pub a: DMatrix<f64>,
+    /// ∂f/∂u on the modes' rows, one column per input.
+    pub b: DMatrix<f64>,
+}
+
+/// [`ModalPlant`] of `model` at `speed`, for a model whose IR describes a steady motion.
+pub fn modal_plant(model: &ResolvedModel, speed: f64) -> Result<ModalPlant> {
+    let motion = Motion::of(model)?;
+    let mut work = Vec::new();
+    let a = motion.modal_jacobian(speed, &mut work)?;
+    let jac_u = model
+        .ir
+        .function("jac_u")
+        .ok_or_else(|| unsupported(&model.ir, "its IR has no function `jac_u`"))?;
+    let (x, u) = (motion.state(speed), vec![0.0; motion.nu]);
+    work.resize(jac_u.n_values(), 0.0);
+    jac_u
+        .eval(&x, &u, motion.params, &mut work)
+        .map_err(|e| Error::input("steady", e.to_string()))?;
+    let mut b = DMatrix::zeros(motion.modes.len(), motion.nu);
+    for (row, col, value) in jac_u.outputs()[0].entries() {
+        if let Some(i) = motion.modes.iter().position(|&m| m == row) {
+            b[(i, col)] = work[value];
+        }
+    }
+    if b.iter().any(|e| !e.is_finite()) {
+        return Err(Error::NonFinite {
+            what: "the input Jacobian".into(),
+            at: format!("speed {speed}"),
+        });
+    }
+    Ok(ModalPlant {
+        speed,
+        modes: motion.mode_names.clone(),
+        a,
+        b,
+    })
+}
+
 fn unsupported(ir: &Ir, reason: &str) -> Error {
     Error::Unsupported {
         model: ir.model().to_string(),
@@ -251,6 +299,18 @@ impl<'a> Motion<'a> {
 
     /// The studied eigenvalues at speed v, sorted.
     fn eigenvalues(&self, v: f64, work: &mut Vec<f64>) -> Result<Vec<(f64, f64)>> {
+        let a = self.modal_jacobian(v, work)?;
+        let mut ev: Vec<(f64, f64)> = a
+            .complex_eigenvalues()
+            .iter()
+            .map(|c| (c.re, c.im))
+            .collect();
+        ev.sort_by(|p, q| p.0.total_cmp(&q.0).then(p.1.total_cmp(&q.1)));
+        Ok(ev)
+    }
+
+    /// ∂f/∂x at the steady motion of speed v, restricted to the studied modes.
+    fn modal_jacobian(&self, v: f64, work: &mut Vec<f64>) -> Result<DMatrix<f64>> {
         let x = self.state(v);
         let u = vec![0.0; self.nu];
         work.resize(self.jac.n_values(), 0.0);
@@ -274,13 +334,7 @@ impl<'a> Motion<'a> {
                 at: format!("speed {v}"),
             });
         }
-        let mut ev: Vec<(f64, f64)> = a
-            .complex_eigenvalues()
-            .iter()
-            .map(|c| (c.re, c.im))
-            .collect();
-        ev.sort_by(|p, q| p.0.total_cmp(&q.0).then(p.1.total_cmp(&q.1)));
-        Ok(ev)
+        Ok(a)
     }
 
     fn abscissa(&self, v: f64, work: &mut Vec<f64>) -> Result<f64> {

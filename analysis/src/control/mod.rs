@@ -35,6 +35,7 @@ mod reference;
 pub mod scenario;
 mod settings;
 mod simulate;
+pub mod steer;
 
 pub use error::ControlError;
 pub use field::{Command, Layout, LoopLanes, PidLoop};

@@ -10,12 +10,13 @@ use serde_json::{json, Value};
 use super::options::{
     as_bool, as_choice, as_number, as_vector, is_none, number, number_value, sub, Access, Kind, Opt,
 };
+use crate::control::steer::SteerSettings;
 use crate::control::{
     AntiWindup, ControllerSettings, Profile, RunSettings, Setpoint, VelocityLoop, YawLoop,
 };
 use crate::error::{Error, Result};
 use crate::integrate::DopriOptions;
-use crate::linear::PidGains;
+use crate::linear::{PidGains, SteerGains};
 use crate::lyapunov::IntegratorChoice;
 
 const INTEGRATORS: &[&str] = &["rk4", "dopri"];
@@ -334,6 +335,105 @@ pub fn gains_value(name: &str, v: &Value, current: PidGains) -> Result<PidGains>
             "wants named gains {kp, ki, kd} (or Kp,Ki,Kd as text)",
         )),
     }
+}
+
+/// Named steer gains from a JSON object (`{"k_phi": …}`, the others unchanged) or the text
+/// `k_phi=…,k_phi_dot=…`; a list is refused, since its order would be a guess.
+pub fn steer_gains_value(name: &str, v: &Value, current: SteerGains) -> Result<SteerGains> {
+    let named = match v {
+        Value::Object(_) | Value::String(_) => super::options::as_named(name, v)?,
+        _ => {
+            return Err(Error::input(
+                name,
+                "named gains k_phi=…,k_delta=…,k_phi_dot=…,k_delta_dot=…, not a list: the \
+                 order of a list would be a guess",
+            ))
+        }
+    };
+    let mut row = current.row();
+    for (k, x) in named {
+        let i = SteerGains::NAMES
+            .iter()
+            .position(|n| *n == k)
+            .ok_or_else(|| {
+                Error::input(
+                    name,
+                    format!(
+                        "`{k}` is not a steer gain; the gains are {}",
+                        SteerGains::NAMES.join(", ")
+                    ),
+                )
+            })?;
+        row[i] = x;
+    }
+    Ok(SteerGains::from_row(row))
+}
+
+/// Steer gains as an object.
+pub fn steer_gains_json(g: &SteerGains) -> Value {
+    json!({"k_phi": g.k_phi, "k_delta": g.k_delta, "k_phi_dot": g.k_phi_dot,
+           "k_delta_dot": g.k_delta_dot})
+}
+
+/// `steer_gains` and `steer_saturation`: a steer-torque law on an optional field (setting
+/// either turns it on).
+pub fn steer<S: Clone + 'static>(access: fn(&mut S) -> &mut Option<SteerSettings>) -> Vec<Opt<S>> {
+    vec![
+        Opt::new(
+            "steer_gains",
+            Kind::Text,
+            "N m/rad, N m s/rad",
+            "Steer a two-wheeler with a steer input (whipple): T_delta = k_phi φ + k_delta δ + \
+             k_phi_dot φ̇ + k_delta_dot δ̇, named k_phi=…,k_delta=…,k_phi_dot=…,k_delta_dot=… \
+             (none: not steered)",
+            move |s: &mut S, v| {
+                if is_none(v) {
+                    *access(s) = None;
+                    return Ok(());
+                }
+                let law = access(s).get_or_insert_with(SteerSettings::default);
+                law.gains = steer_gains_value("steer_gains", v, law.gains)?;
+                Ok(())
+            },
+            move |s| {
+                let mut copy = s.clone();
+                access(&mut copy)
+                    .as_ref()
+                    .map_or(Value::Null, |l| steer_gains_json(&l.gains))
+            },
+        ),
+        Opt::new(
+            "steer_saturation",
+            Kind::Number,
+            "N m",
+            "Steer-torque limit |T_delta| ≤ T_max (none: unlimited); needs steer_gains",
+            move |s: &mut S, v| {
+                let limit = if is_none(v) {
+                    None
+                } else {
+                    Some(as_number("steer_saturation", v)?)
+                };
+                match access(s) {
+                    Some(law) => law.saturation = limit,
+                    None if limit.is_none() => {}
+                    None => {
+                        return Err(Error::input(
+                            "steer_saturation",
+                            "limits the steer torque of steer_gains: give the gains too",
+                        ))
+                    }
+                }
+                Ok(())
+            },
+            move |s| {
+                let mut copy = s.clone();
+                access(&mut copy)
+                    .as_ref()
+                    .and_then(|l| l.saturation)
+                    .map_or(Value::Null, |t| json!(t))
+            },
+        ),
+    ]
 }
 
 /// The gains as an object.

@@ -34,6 +34,7 @@ mod phase;
 mod ride;
 mod simulate;
 mod steady;
+mod steer;
 mod sweep;
 mod tune;
 
@@ -56,6 +57,7 @@ pub use phase::Phase;
 pub use ride::Ride;
 pub use simulate::Simulate;
 pub use steady::Steady;
+pub use steer::Steer;
 pub use sweep::{Sweep, SweepPoints};
 pub use tune::Tune;
 
@@ -328,8 +330,8 @@ macro_rules! registry {
 }
 
 registry![
-    Evaluate, Codegen, Audit, Lyapunov, Simulate, Disturb, Ride, Phase, Linearize, Steady, Tune,
-    Sweep, Exponent, Export,
+    Evaluate, Codegen, Audit, Lyapunov, Simulate, Disturb, Ride, Phase, Linearize, Steady, Steer,
+    Tune, Sweep, Exponent, Export,
 ];
 
 /// Every job.

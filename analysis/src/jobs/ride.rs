@@ -1,9 +1,9 @@
-//! `ride`: an uncontrolled run under constant inputs, from a state or from a steady motion at a
-//! speed with some states pushed (the bicycle nobody steers).
+//! `ride`: a run under constant inputs, from a state or from a steady motion at a speed with
+//! some states pushed: the bicycle nobody steers, or steered by a steer-torque law.
 
 use serde_json::{json, Value};
 
-use super::groups::run;
+use super::groups::{run, steer};
 use super::options::{as_named, as_text, field, optional_number, optional_vector, Kind, Opt};
 use super::simulate::by_column;
 use super::{run_budget, Budget, Job, JobOutput};
@@ -13,15 +13,15 @@ use crate::model::ResolvedModel;
 use crate::output::Files;
 use crate::progress::Progress;
 
-/// The uncontrolled run.
+/// The run under constant inputs (and an optional steer law).
 pub struct Ride;
 
 impl Job for Ride {
     const NAME: &'static str = "ride";
     const FILES: &'static str = "ride.csv, ride.json and a figure per moving state (SVG and PNG)";
     const SUMMARY: &'static str =
-        "Uncontrolled run under constant inputs, from a state or a steady motion at a speed \
-         (the bicycle nobody steers): CSV, figures, whether the push died out";
+        "Run under constant inputs, from a state or a steady motion at a speed (the bicycle \
+         nobody steers, or steered with steer_gains): CSV, figures, whether the push died out";
     type Settings = RideSettings;
     type Output = RideResult;
 
@@ -71,6 +71,7 @@ impl Job for Ride {
                 |s| Value::String(s.watch.clone()),
             ),
         ];
+        opts.extend(steer(|s: &mut RideSettings| &mut s.steer));
         opts.extend(run(field(|s: &mut RideSettings| &mut s.run)));
         opts
     }

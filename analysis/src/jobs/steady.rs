@@ -15,7 +15,7 @@ use crate::progress::Progress;
 pub struct Steady;
 
 /// `LO:HI:STEP` as text, or `[lo, hi, step]`.
-fn speeds(v: &Value) -> Result<(f64, f64, f64)> {
+pub(super) fn speeds(v: &Value) -> Result<(f64, f64, f64)> {
     let parts = match v {
         Value::String(text) => text
             .split(':')

@@ -13,7 +13,7 @@ use crate::error::{Error, Result};
 use crate::linear::PidGains;
 use crate::model::ResolvedModel;
 use crate::progress::Progress;
-use crate::tune::Objective;
+use crate::tune::{Objective, Spec};
 
 /// Most requirements of one specification.
 pub const MAX_REQUIREMENTS: usize = 16;
@@ -41,11 +41,7 @@ impl Job for Tune {
                  dgm>=FACTOR (disk gain margin), ms<=PEAK (peak sensitivity), force<=N (peak \
                  force of the certificate's tilt recovery)",
                 |s: &mut TuneSettings, v| {
-                    s.spec = match v {
-                        Value::String(t) => t.parse()?,
-                        other => serde_json::from_value(other.clone())
-                            .map_err(|e| Error::input("spec", e.to_string()))?,
-                    };
+                    s.spec = spec_value(v)?;
                     Ok(())
                 },
                 |s| json!(s.spec.to_string()),
@@ -174,6 +170,15 @@ impl Job for Tune {
     fn run(model: &ResolvedModel, s: &TuneSettings, p: &dyn Progress) -> Result<TuneReport> {
         tune_model_with(model, s, p)
     }
+}
+
+/// A spec from its text (`dpm>=45,ms<=1.6`) or its structured JSON.
+pub(super) fn spec_value(v: &Value) -> Result<Spec> {
+    Ok(match v {
+        Value::String(t) => t.parse()?,
+        other => serde_json::from_value(other.clone())
+            .map_err(|e| Error::input("spec", e.to_string()))?,
+    })
 }
 
 impl JobOutput for TuneReport {

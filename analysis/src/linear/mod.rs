@@ -16,6 +16,7 @@ pub mod modes;
 pub mod pitch;
 pub mod report;
 pub mod siso;
+pub mod steer;
 
 pub use care::{solve_care, CareSolution, CareStatus};
 pub use cart_pendulum::CartPendulum;
@@ -28,6 +29,7 @@ pub use modes::{eigenvalues, modes, spectral_abscissa, Mode, ModeKind};
 pub use pitch::{ClosedLoop, GainBasis, LoopOptions, PidGains, PitchLoop};
 pub use report::{analyse_pitch, loop_response, ExclusionDisk, LoopResponse, PitchAnalysis};
 pub use siso::{HiddenKind, HiddenPart, SisoPlant};
+pub use steer::{SteerAnalysis, SteerClosedLoop, SteerGains, SteerLoop};
 
 /// A matrix as JSON in its natural shape: one list per row (nalgebra's own serialisation is
 /// its column-major storage, which a reader would take for rows).

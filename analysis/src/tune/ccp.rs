@@ -34,12 +34,14 @@ pub enum Objective {
     MaxProportional,
 }
 
-/// The discretised design problem in scaled variables x_j = k_j / s_j.
+/// The discretised design problem in scaled variables x_j = k_j / s_j, for any loop whose
+/// return ratio is linear in its gains, L(jω) = Σ_j k_j φ_j(jω).
 pub(crate) struct Design {
-    /// Which gains are variables: 0 = Kp, 1 = Ki, 2 = Kd.
+    /// Which PID gain each variable is (0 = Kp, 1 = Ki, 2 = Kd); for another loop the
+    /// variable's own index.
     vars: Vec<usize>,
-    /// Gain scales s (Kp, Ki, Kd).
-    scale: [f64; 3],
+    /// Scale s_j of each variable.
+    scale: Vec<f64>,
     /// Per frequency, s_j φ_j (lag and delay included) for each variable.
     basis: Vec<Vec<Complex<f64>>>,
     /// Scaled lower bounds.
@@ -75,12 +77,13 @@ impl Design {
         let b_ref = [1.0, 2.0, 0.5]
             .iter()
             .find_map(|k| lp.gain_basis(0.0, k * w_ref))?;
-        let scale = [
+        let pid_scale = [
             1.0 / b_ref.p.norm(),
             1.0 / b_ref.i?.norm(),
             1.0 / b_ref.d.norm(),
         ];
         let vars: Vec<usize> = if pid { vec![0, 1, 2] } else { vec![0, 2] };
+        let scale: Vec<f64> = vars.iter().map(|&j| pid_scale[j]).collect();
         let mut w_hi = 1e3 * w_ref;
         for t in [opts.lag, opts.delay] {
             if t > 0.0 {
@@ -97,10 +100,11 @@ impl Design {
                 let b = lp.gain_basis(opts.lag, w)?;
                 let h = Complex::from_polar(1.0, -w * opts.delay);
                 vars.iter()
-                    .map(|&j| match j {
-                        0 => Some(b.p * h * scale[0]),
-                        1 => b.i.map(|i| i * h * scale[1]),
-                        _ => Some(b.d * h * scale[2]),
+                    .zip(&scale)
+                    .map(|(&j, s)| match j {
+                        0 => Some(b.p * h * *s),
+                        1 => b.i.map(|i| i * h * *s),
+                        _ => Some(b.d * h * *s),
                     })
                     .collect::<Option<Vec<_>>>()
             })
@@ -115,6 +119,37 @@ impl Design {
         })
     }
 
+    /// A design of `basis` (per frequency, φ_j(jω) of each gain, unscaled), with the gains
+    /// scaled by `scale` and bounded by `lower` ≤ k ≤ `upper` (unscaled).
+    pub fn from_basis(
+        basis: Vec<Vec<Complex<f64>>>,
+        scale: Vec<f64>,
+        lower: &[f64],
+        upper: &[f64],
+    ) -> Self {
+        let basis = basis
+            .into_iter()
+            .map(|row| row.iter().zip(&scale).map(|(b, s)| b * *s).collect())
+            .collect();
+        Self {
+            vars: (0..scale.len()).collect(),
+            lower: lower.iter().zip(&scale).map(|(l, s)| l / s).collect(),
+            upper: upper.iter().zip(&scale).map(|(u, s)| u / s).collect(),
+            scale,
+            basis,
+        }
+    }
+
+    /// The gains k_j = s_j x_j of scaled variables.
+    pub fn values(&self, x: &[f64]) -> Vec<f64> {
+        x.iter().zip(&self.scale).map(|(v, s)| v * s).collect()
+    }
+
+    /// The scaled variables x_j = k_j / s_j of gains.
+    pub fn scaled_values(&self, k: &[f64]) -> Vec<f64> {
+        k.iter().zip(&self.scale).map(|(v, s)| v / s).collect()
+    }
+
     /// Bounds Kp from above by `kp_max` (the effort bound; never below the lower bound).
     pub fn bound_kp(&mut self, kp_max: f64) {
         let x = (kp_max / self.scale[0]).max(self.lower[KP]);
@@ -126,11 +161,11 @@ impl Design {
         self.vars.len()
     }
 
-    /// Gains of scaled variables.
+    /// PID gains of scaled variables.
     pub fn gains(&self, x: &[f64]) -> PidGains {
         let mut k = [0.0; 3];
-        for (v, &j) in self.vars.iter().enumerate() {
-            k[j] = x[v] * self.scale[j];
+        for ((&j, v), s) in self.vars.iter().zip(x).zip(&self.scale) {
+            k[j] = v * s;
         }
         PidGains {
             kp: k[0],
@@ -139,10 +174,14 @@ impl Design {
         }
     }
 
-    /// Scaled variables of gains.
+    /// Scaled variables of PID gains.
     pub fn scaled(&self, g: &PidGains) -> Vec<f64> {
         let k = [g.kp, g.ki, g.kd];
-        self.vars.iter().map(|&j| k[j] / self.scale[j]).collect()
+        self.vars
+            .iter()
+            .zip(&self.scale)
+            .map(|(&j, s)| k[j] / s)
+            .collect()
     }
 
     fn response(&self, at: &[Complex<f64>], x: &[f64]) -> Complex<f64> {
@@ -274,6 +313,35 @@ pub(crate) fn phase1(
     }
 }
 
+/// What phase 2 optimises, in the design's scaled variables.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Goal {
+    /// Closest to these scaled variables (least squares).
+    Target(Vec<f64>),
+    /// Smallest scaled 2-norm.
+    MinGain,
+    /// Largest value of this variable.
+    Max(usize),
+}
+
+impl Objective {
+    /// The goal of a PID design.
+    pub(crate) fn goal(&self, design: &Design) -> Goal {
+        match self {
+            Objective::Target(t) => Goal::Target(design.scaled(t)),
+            Objective::MinGain => Goal::MinGain,
+            Objective::MaxIntegral | Objective::MaxProportional => {
+                let which = if matches!(self, Objective::MaxIntegral) {
+                    1
+                } else {
+                    0
+                };
+                Goal::Max(design.vars.iter().position(|&j| j == which).unwrap_or(0))
+            }
+        }
+    }
+}
+
 /// How phase 2 ended.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum Phase2End {
@@ -287,36 +355,26 @@ pub(crate) enum Phase2End {
     Interrupted,
 }
 
-/// Phase 2: optimise the objective from feasible x0. Returns the gains, how it ended and the
+/// Phase 2: optimise the goal from feasible x0. Returns the gains, how it ended and the
 /// number of subproblems solved.
 pub(crate) fn phase2(
     design: &Design,
     x0: &[f64],
     disks: &[Disk],
-    objective: &Objective,
+    goal: &Goal,
     max_iter: usize,
     stop: &dyn Fn() -> bool,
 ) -> (Vec<f64>, Phase2End, usize) {
     let n = design.len();
-    let (p_diag, q) = match objective {
-        Objective::Target(t) => {
-            let ts = design.scaled(t);
-            (vec![1.0; n], ts.iter().map(|v| -v).collect())
-        }
-        Objective::MinGain => (vec![1.0; n], vec![0.0; n]),
-        Objective::MaxIntegral | Objective::MaxProportional => {
-            let which = if matches!(objective, Objective::MaxIntegral) {
-                1
-            } else {
-                0
-            };
-            let q = design
-                .vars
-                .iter()
-                .map(|&j| if j == which { -1.0 } else { 0.0 })
-                .collect();
-            (vec![0.0; n], q)
-        }
+    let (p_diag, q) = match goal {
+        Goal::Target(ts) => (vec![1.0; n], ts.iter().map(|v| -v).collect()),
+        Goal::MinGain => (vec![1.0; n], vec![0.0; n]),
+        Goal::Max(which) => (
+            vec![0.0; n],
+            (0..n)
+                .map(|v| if v == *which { -1.0 } else { 0.0 })
+                .collect(),
+        ),
     };
     let mut x = x0.to_vec();
     for it in 1..=max_iter {

@@ -6,9 +6,11 @@ pub mod ccp;
 pub mod certificate;
 mod qp;
 pub mod spec;
+pub mod steer;
 pub mod tuner;
 
 pub use ccp::Objective;
 pub use certificate::{certify, Certificate};
 pub use spec::{Requirement, Spec, SpecError};
+pub use steer::{certify_steer, tune_steer, SteerCertificate, SteerTune, SteerTuneOptions};
 pub use tuner::{tune, tune_with, validate, TuneError, TuneOptions, TuneResult, TuneStatus};

@@ -10,7 +10,7 @@
 //! the largest fraction t of the spec (bisection on t, each step warm-started) whose gains
 //! pass the independent check.
 
-use super::ccp::{phase1, phase2, Design, Objective, Phase1, Phase2End};
+use super::ccp::{phase1, phase2, Design, Goal, Objective, Phase1, Phase2End};
 use super::certificate::{certify, Certificate};
 use super::spec::Spec;
 use crate::linear::disk::Disk;
@@ -177,6 +177,171 @@ fn check(options: &TuneOptions) -> Result<Objective, TuneError> {
     Ok(objective)
 }
 
+/// A loop the convex–concave tuner designs for: one whose return ratio is linear in its gains
+/// (the pitch PID, the steer loop), with an independent check of the gains it returns.
+pub(crate) trait Tunable {
+    /// The loop's gains.
+    type Gains: Copy;
+    /// The independent check of gains.
+    type Certificate: Clone;
+    /// The design problem on a grid of `points_per_decade`.
+    fn design(&self, points_per_decade: usize) -> Result<Design, TuneError>;
+    /// The gains of scaled variables.
+    fn gains(&self, design: &Design, x: &[f64]) -> Self::Gains;
+    /// The independent check of `gains` against `spec`, and whether they meet it.
+    fn certify(
+        &self,
+        gains: &Self::Gains,
+        spec: &Spec,
+    ) -> Result<(Self::Certificate, bool), LinearError>;
+    /// The gains a certificate checked.
+    fn certified(certificate: &Self::Certificate) -> Self::Gains;
+    /// `x0` if it stabilises the loop, else another stabilising start; `None` if none is found.
+    /// The convex–concave steps keep stability only from a stabilising start.
+    fn stabilising_start(
+        &self,
+        design: &Design,
+        x0: Vec<f64>,
+    ) -> Result<Option<Vec<f64>>, LinearError>;
+}
+
+/// How a design ended, for any [`Tunable`] loop.
+pub(crate) struct Outcome<C> {
+    pub status: TuneStatus,
+    pub certificate: Option<C>,
+    pub best_fraction: f64,
+    pub iterations: usize,
+}
+
+impl<C> Outcome<C> {
+    fn infeasible() -> Self {
+        Self {
+            status: TuneStatus::Infeasible,
+            certificate: None,
+            best_fraction: 0.0,
+            iterations: 0,
+        }
+    }
+}
+
+/// The design of `lp` to `spec`: from the start `x0` (of the first design), phase 1 and 2 with
+/// the design aiming a little past the spec and a denser grid each time the independent check
+/// fails; when phase 1 stalls, the best achievable fraction of the spec.
+pub(crate) fn design_run<L: Tunable>(
+    lp: &L,
+    spec: &Spec,
+    goal: &dyn Fn(&Design) -> Goal,
+    x0: &dyn Fn(&Design) -> Vec<f64>,
+    points_per_decade: usize,
+    max_iterations: usize,
+    stop: &dyn Fn() -> bool,
+) -> Result<Outcome<L::Certificate>, TuneError> {
+    let mut design = lp.design(points_per_decade)?;
+    let clamped = x0(&design)
+        .iter()
+        .zip(design.lower.iter().zip(&design.upper))
+        .map(|(v, (l, u))| v.clamp(*l, *u))
+        .collect();
+    let Some(x0) = lp.stabilising_start(&design, clamped)? else {
+        return Ok(Outcome::infeasible());
+    };
+    let mut ppd = points_per_decade;
+    let mut start = x0.clone();
+    for attempt in 0..4 {
+        let aim = spec.scaled(1.0 + 1e-3 * 10f64.powi(attempt));
+        let floor = disks(&spec.scaled(level(&design, &start, spec) * (1.0 - 1e-3)));
+        match phase1(&design, &start, &disks(&aim), &floor, max_iterations, stop) {
+            Phase1::Stalled => break,
+            Phase1::Interrupted => return Err(TuneError::Interrupted),
+            Phase1::Feasible(x) => {
+                let (x, end, iterations) = phase2(
+                    &design,
+                    &x,
+                    &disks(&aim),
+                    &goal(&design),
+                    max_iterations,
+                    stop,
+                );
+                let (cert, meets) = lp.certify(&lp.gains(&design, &x), spec)?;
+                if meets {
+                    let status = match end {
+                        Phase2End::Converged | Phase2End::SolverFailed(_) => TuneStatus::Solved,
+                        Phase2End::IterationLimit => TuneStatus::IterationLimit,
+                        Phase2End::Interrupted => return Err(TuneError::Interrupted),
+                    };
+                    return Ok(Outcome {
+                        status,
+                        certificate: Some(cert),
+                        best_fraction: 1.0,
+                        iterations,
+                    });
+                }
+                start = x;
+                ppd *= 2;
+                design = lp.design(ppd)?;
+                if attempt == 3 {
+                    return Ok(Outcome {
+                        status: TuneStatus::Unverified,
+                        certificate: Some(cert),
+                        best_fraction: 1.0,
+                        iterations,
+                    });
+                }
+            }
+        }
+    }
+    best_achievable(lp, spec, &design, x0, max_iterations, stop)
+}
+
+/// The pitch loop with the tuner's options, as a [`Tunable`] loop.
+struct PitchDesign<'a> {
+    lp: &'a PitchLoop,
+    options: &'a TuneOptions,
+    /// Kp·tilt ≤ this force bound, from the spec.
+    peak_force: Option<f64>,
+}
+
+impl Tunable for PitchDesign<'_> {
+    type Gains = PidGains;
+    type Certificate = Certificate;
+
+    fn design(&self, ppd: usize) -> Result<Design, TuneError> {
+        let o = self.options;
+        let mut d = Design::new(self.lp, &o.loop_options, o.pid, ppd, o.max_gain_factor).ok_or(
+            TuneError::Option {
+                what: "model",
+                why: "the plant has a pole at its own reference frequency",
+            },
+        )?;
+        if let Some(force) = self.peak_force {
+            d.bound_kp(force / o.effort_tilt);
+        }
+        Ok(d)
+    }
+
+    fn gains(&self, design: &Design, x: &[f64]) -> PidGains {
+        design.gains(x)
+    }
+
+    fn certify(&self, g: &PidGains, spec: &Spec) -> Result<(Certificate, bool), LinearError> {
+        let cert = certify(self.lp, g, &self.options.loop_options, spec)?;
+        let meets = cert.meets_spec;
+        Ok((cert, meets))
+    }
+
+    fn certified(c: &Certificate) -> PidGains {
+        c.gains
+    }
+
+    fn stabilising_start(
+        &self,
+        design: &Design,
+        x0: Vec<f64>,
+    ) -> Result<Option<Vec<f64>>, LinearError> {
+        stabilising_start(self.lp, design, &self.options.loop_options, x0)
+    }
+}
+
 /// Tunes the pitch loop `lp` to `spec`.
 pub fn tune(lp: &PitchLoop, spec: &Spec, options: &TuneOptions) -> Result<TuneResult, TuneError> {
     tune_with(lp, spec, options, &crate::progress::Silent)
@@ -191,140 +356,63 @@ pub fn tune_with(
 ) -> Result<TuneResult, TuneError> {
     let stop = || progress.cancelled();
     let objective = check(options)?;
-    let opts = options.loop_options;
-    if lp.plant().order() == 0 {
+    let outcome = if lp.plant().order() == 0 {
         // The force does not reach Φ: no gains move the loop, no margin can be met.
-        return Ok(TuneResult {
-            status: TuneStatus::Infeasible,
-            spec: spec.clone(),
-            certificate: None,
-            best_fraction: 0.0,
-            iterations: 0,
-        });
-    }
-    let design_for = |ppd: usize| {
-        let mut d = Design::new(lp, &opts, options.pid, ppd, options.max_gain_factor).ok_or(
-            TuneError::Option {
-                what: "model",
-                why: "the plant has a pole at its own reference frequency",
-            },
-        )?;
-        if let Some(force) = spec.peak_force() {
-            d.bound_kp(force / options.effort_tilt);
-        }
-        Ok::<_, TuneError>(d)
-    };
-    let mut design = design_for(options.points_per_decade)?;
-    let clamp = |d: &Design, x: Vec<f64>| -> Vec<f64> {
-        x.iter()
-            .zip(d.lower.iter().zip(&d.upper))
-            .map(|(v, (l, u))| v.clamp(*l, *u))
-            .collect()
-    };
-    let x0 = match options.start.or(options.target) {
-        Some(g) => clamp(&design, design.scaled(&g)),
-        None => {
+        Outcome::infeasible()
+    } else {
+        let pitch = PitchDesign {
+            lp,
+            options,
+            peak_force: spec.peak_force(),
+        };
+        let x0 = |design: &Design| match options.start.or(options.target) {
+            Some(g) => design.scaled(&g),
             // Kp = s_p, Kd = s_d (for the pitch plant 2 M_x g and 2 M_x g/λ: stabilising),
             // Ki = 0, so the start is a PD even when tuning a PID.
-            let unit = design.gains(&vec![1.0; design.len()]);
-            clamp(&design, design.scaled(&PidGains { ki: 0.0, ..unit }))
-        }
-    };
-
-    let Some(x0) = stabilising_start(lp, &design, &opts, x0)? else {
-        return Ok(TuneResult {
-            status: TuneStatus::Infeasible,
-            spec: spec.clone(),
-            certificate: None,
-            best_fraction: 0.0,
-            iterations: 0,
-        });
-    };
-    let mut ppd = options.points_per_decade;
-    let mut start = x0.clone();
-    for attempt in 0..4 {
-        let aim = spec.scaled(1.0 + 1e-3 * 10f64.powi(attempt));
-        let floor = disks(&spec.scaled(level(&design, &start, spec) * (1.0 - 1e-3)));
-        match phase1(
-            &design,
-            &start,
-            &disks(&aim),
-            &floor,
+            None => {
+                let unit = design.gains(&vec![1.0; design.len()]);
+                design.scaled(&PidGains { ki: 0.0, ..unit })
+            }
+        };
+        design_run(
+            &pitch,
+            spec,
+            &|d| objective.goal(d),
+            &x0,
+            options.points_per_decade,
             options.max_iterations,
             &stop,
-        ) {
-            Phase1::Stalled => break,
-            Phase1::Interrupted => return Err(TuneError::Interrupted),
-            Phase1::Feasible(x) => {
-                let (x, end, iterations) = phase2(
-                    &design,
-                    &x,
-                    &disks(&aim),
-                    &objective,
-                    options.max_iterations,
-                    &stop,
-                );
-                let cert = certify(lp, &design.gains(&x), &opts, spec)?;
-                if cert.meets_spec {
-                    let status = match end {
-                        Phase2End::Converged | Phase2End::SolverFailed(_) => TuneStatus::Solved,
-                        Phase2End::IterationLimit => TuneStatus::IterationLimit,
-                        Phase2End::Interrupted => return Err(TuneError::Interrupted),
-                    };
-                    return Ok(TuneResult {
-                        status,
-                        spec: spec.clone(),
-                        certificate: Some(cert),
-                        best_fraction: 1.0,
-                        iterations,
-                    });
-                }
-                start = x;
-                ppd *= 2;
-                design = design_for(ppd)?;
-                if attempt == 3 {
-                    return Ok(TuneResult {
-                        status: TuneStatus::Unverified,
-                        spec: spec.clone(),
-                        certificate: Some(cert),
-                        best_fraction: 1.0,
-                        iterations,
-                    });
-                }
-            }
-        }
-    }
-    best_achievable(lp, spec, options, &design, x0, &stop)
+        )?
+    };
+    Ok(TuneResult {
+        status: outcome.status,
+        spec: spec.clone(),
+        certificate: outcome.certificate,
+        best_fraction: outcome.best_fraction,
+        iterations: outcome.iterations,
+    })
 }
 
 /// Bisection on the fraction t of the spec for the best verified gains.
-fn best_achievable(
-    lp: &PitchLoop,
+fn best_achievable<L: Tunable>(
+    lp: &L,
     spec: &Spec,
-    options: &TuneOptions,
     design: &Design,
     x0: Vec<f64>,
+    max_iterations: usize,
     stop: &dyn Fn() -> bool,
-) -> Result<TuneResult, TuneError> {
-    let opts = options.loop_options;
+) -> Result<Outcome<L::Certificate>, TuneError> {
     let (mut lo, mut hi) = (0.0, 1.0);
-    let mut best: Option<Certificate> = None;
+    let mut best: Option<L::Certificate> = None;
     let mut x_best = x0;
     for _ in 0..14 {
         let mid = 0.5 * (lo + hi);
         let aim = spec.scaled(mid * (1.0 + 1e-3));
         let floor = disks(&spec.scaled(level(design, &x_best, spec) * (1.0 - 1e-3)));
-        let found = match phase1(
-            design,
-            &x_best,
-            &disks(&aim),
-            &floor,
-            options.max_iterations,
-            stop,
-        ) {
+        let found = match phase1(design, &x_best, &disks(&aim), &floor, max_iterations, stop) {
             Phase1::Feasible(x) => {
-                let cert = certify(lp, &design.gains(&x), &opts, &spec.scaled(mid))?;
-                cert.meets_spec.then_some((x, cert))
+                let (cert, meets) = lp.certify(&lp.gains(design, &x), &spec.scaled(mid))?;
+                meets.then_some((x, cert))
             }
             Phase1::Stalled => None,
             Phase1::Interrupted => return Err(TuneError::Interrupted),
@@ -340,18 +428,19 @@ fn best_achievable(
     }
     // The certificate is always against the spec asked for, so `meets_spec`, the status and
     // every message say the same thing; gains that happen to meet it after all are a solution.
-    let certificate = match best {
-        Some(c) => Some(certify(lp, &c.gains, &opts, spec)?),
-        None => None,
+    let (certificate, met) = match best {
+        Some(c) => {
+            let (cert, meets) = lp.certify(&L::certified(&c), spec)?;
+            (Some(cert), meets)
+        }
+        None => (None, false),
     };
-    let met = certificate.as_ref().is_some_and(|c| c.meets_spec);
-    Ok(TuneResult {
+    Ok(Outcome {
         status: if met {
             TuneStatus::Solved
         } else {
             TuneStatus::Infeasible
         },
-        spec: spec.clone(),
         certificate,
         best_fraction: if met { 1.0 } else { lo },
         iterations: 0,

@@ -25,5 +25,6 @@ mod properties;
 mod report;
 mod serve;
 mod steady;
+mod steer;
 mod sweep;
 mod sweep_lanes;

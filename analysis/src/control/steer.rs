@@ -1,0 +1,152 @@
+//! The steer-torque law of a two-wheeler with a steer input (the bicycle), on the nonlinear
+//! model: T_δ = sat(k_φ φ + k_δ δ + k_φ̇ φ̇ + k_δ̇ δ̇), every other input held at its given value.
+//! The linear analysis and the tuning of the same law are [`crate::linear::steer`] and
+//! [`crate::tune::steer`].
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::integrate::FeedbackLaw;
+use crate::linear::steer::{SteerGains, STEER_INPUT};
+
+/// The law's settings. Default: no gains (no steering) and no torque limit.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SteerSettings {
+    /// The gains on lean, steer, lean rate and steer rate.
+    pub gains: SteerGains,
+    /// The torque limit |T_δ| ≤ T_max [N m]; `None`: unlimited.
+    pub saturation: Option<f64>,
+}
+
+impl SteerSettings {
+    /// Checks the gains and the limit; the error names the field.
+    pub fn validate(&self) -> Result<()> {
+        for (name, k) in SteerGains::NAMES.iter().zip(self.gains.row()) {
+            if !k.is_finite() {
+                return Err(Error::input(*name, format!("{k} is not finite")));
+            }
+        }
+        if let Some(t) = self.saturation {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(Error::input(
+                    "steer_saturation",
+                    format!("{t}: a torque limit must be finite and > 0 N m"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The law on a model: where it reads (the four lean-and-steer states) and acts (`T_delta`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SteerLaw<const NX: usize, const NU: usize> {
+    /// Indices of φ, δ, φ̇, δ̇ in the state.
+    modes: [usize; 4],
+    /// Index of the steer torque in the input.
+    input: usize,
+    gains: [f64; 4],
+    saturation: Option<f64>,
+    /// The other inputs, held.
+    base: [f64; NU],
+}
+
+impl<const NX: usize, const NU: usize> SteerLaw<NX, NU> {
+    /// The law on a model with states `states` and inputs `inputs`, steering with `settings`
+    /// on top of the constant inputs `base` (its steer-torque entry must be 0). `modes` names
+    /// the lean, steer, lean-rate and steer-rate states (the IR's steady-motion modes).
+    pub fn new(
+        model: &str,
+        states: &[&str],
+        inputs: &[&str],
+        modes: &[String],
+        settings: &SteerSettings,
+        base: [f64; NU],
+    ) -> Result<Self> {
+        settings.validate()?;
+        let unsupported = |reason: String| Error::Unsupported {
+            model: model.to_string(),
+            reason,
+        };
+        let input = inputs
+            .iter()
+            .position(|n| *n == STEER_INPUT)
+            .ok_or_else(|| {
+                unsupported(format!(
+                    "no steer input to control: a steer controller needs an input named \
+                 {STEER_INPUT} (inputs: {})",
+                    inputs.join(", ")
+                ))
+            })?;
+        if modes.len() != 4 {
+            return Err(unsupported(format!(
+                "a steer controller needs the four lean-and-steer modes (lean, steer, their \
+                 rates) of the IR's steady motion; it names {}",
+                modes.len()
+            )));
+        }
+        let mut idx = [0; 4];
+        for (slot, name) in idx.iter_mut().zip(modes) {
+            *slot = states.iter().position(|n| n == name).ok_or_else(|| {
+                unsupported(format!("steady-motion mode `{name}` is not a state"))
+            })?;
+        }
+        if base[input] != 0.0 {
+            return Err(Error::input(
+                "u",
+                format!(
+                    "{STEER_INPUT} = {} is given and steered: leave it 0 when a steer \
+                     controller is on",
+                    base[input]
+                ),
+            ));
+        }
+        Ok(Self {
+            modes: idx,
+            input,
+            gains: settings.gains.row(),
+            saturation: settings.saturation,
+            base,
+        })
+    }
+
+    /// The unsaturated torque command at `x`.
+    fn command(&self, x: &[f64; NX]) -> f64 {
+        self.modes
+            .iter()
+            .zip(self.gains)
+            .map(|(&i, k)| k * x[i])
+            .sum()
+    }
+
+    /// The applied steer torque at `x` [N m].
+    pub fn torque(&self, x: &[f64; NX]) -> f64 {
+        let c = self.command(x);
+        match self.saturation {
+            Some(t) => c.clamp(-t, t),
+            None => c,
+        }
+    }
+}
+
+impl<const NX: usize, const NU: usize> FeedbackLaw<NX, NU> for SteerLaw<NX, NU> {
+    #[inline]
+    fn input(&self, _t: f64, x: &[f64; NX]) -> [f64; NU] {
+        let mut u = self.base;
+        u[self.input] = self.torque(x);
+        u
+    }
+
+    fn jacobian(&self, _t: f64, x: &[f64; NX], out: &mut [[f64; NX]; NU]) {
+        for row in out.iter_mut() {
+            row.fill(0.0);
+        }
+        let saturated = self.saturation.is_some_and(|t| self.command(x).abs() > t);
+        if !saturated {
+            for (&i, k) in self.modes.iter().zip(self.gains) {
+                out[self.input][i] = k;
+            }
+        }
+    }
+}

@@ -1,0 +1,58 @@
+"""Balancing the bicycle by steering, from Python: `twv.steer`'s closed-loop eigenvalues against
+the linear benchmark equations of Meijaard et al. (2007) computed from the 25 parameters by the
+modeling package's closed-form Appendix A (`twv_modeling.whipple_benchmark`: a second derivation,
+not twv's), with the feedback T_delta = K (phi, delta, phi', delta') substituted; and a tuned
+schedule read as data."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from twv_modeling.whipple_benchmark import benchmark_matrices, read_parameters
+
+import twv
+
+GAINS = {"k_phi": 40.0, "k_delta": -25.0, "k_phi_dot": 12.0, "k_delta_dot": -4.0}
+
+
+def benchmark_closed_loop(v: float, k: np.ndarray) -> np.ndarray:
+    b = benchmark_matrices(read_parameters())
+    a = b.state_matrix(v)
+    minv = np.linalg.inv(b.M)
+    # f = (0, T_delta) with T_delta = K x: the steer column of M^-1 times K on the rates' rows.
+    a[2:, :] += np.outer(minv[:, 1], k)
+    ev = np.linalg.eigvals(a)
+    return ev[np.lexsort((ev.imag, ev.real))]
+
+
+@pytest.mark.parametrize("v", [1.0, 3.0, 5.0, 7.0])
+def test_given_gains_give_the_benchmark_closed_loop(v):
+    r = twv.steer(twv.Model("whipple"), speed=v, gains=GAINS)
+    (ours,) = r.closed_loop_eigenvalues
+    ours = ours[np.lexsort((ours.imag, ours.real))]
+    k = np.array([GAINS[g] for g in ("k_phi", "k_delta", "k_phi_dot", "k_delta_dot")])
+    theirs = benchmark_closed_loop(v, k)
+    assert np.all(np.abs(ours - theirs) <= 1e-10 * np.maximum(1.0, np.abs(theirs))), (ours, theirs)
+    # Unsteered, the same path gives the open loop.
+    (open_loop,) = r.open_loop_eigenvalues
+    open_loop = open_loop[np.lexsort((open_loop.imag, open_loop.real))]
+    assert np.allclose(open_loop, benchmark_closed_loop(v, np.zeros(4)), rtol=1e-10, atol=1e-10)
+
+
+def test_a_schedule_is_data():
+    r = twv.steer(twv.Model("whipple"), speed="2:6:2")
+    assert r.ok and r.met.all() and r.gains.shape == (3, 4)
+    df = r.to_pandas()
+    assert list(df["speed"]) == [2.0, 4.0, 6.0]
+    assert (df["disk_phase_margin_deg"] >= 45.0 - 1e-7).all()
+    # Steering into the fall: the lean gain is positive at every speed.
+    assert (r.gains[:, 0] > 0).all()
+
+
+def test_a_ride_steered_by_the_schedules_gains_recovers():
+    r = twv.steer(twv.Model("whipple"), speed=3)
+    k = dict(zip(("k_phi", "k_delta", "k_phi_dot", "k_delta_dot"), r.gains[0], strict=True))
+    ride = twv.ride(twv.Model("whipple"), speed=3, perturb="w_phi=0.5", steer_gains=k)
+    assert ride.raw["verdict"] == "recovered", ride.summary
+    unsteered = twv.ride(twv.Model("whipple"), speed=3, perturb="w_phi=0.5")
+    assert unsteered.raw["verdict"] == "fell", unsteered.summary

@@ -1,0 +1,247 @@
+//! Balancing the bicycle by steering (`twv steer`, `ride --steer-gains`): the steer loop's
+//! closed-loop eigenvalues against the published linear benchmark equations with the feedback
+//! substituted (a second, independent path), the nonlinear closed loop's Jacobian at straight
+//! running against the linear loop, a tuned schedule whose certificates and nonlinear checks
+//! hold at every speed, an infeasible spec that flips when loosened, and bad input.
+
+use std::path::PathBuf;
+
+use nalgebra::{Complex, DMatrix};
+use serde_json::Value;
+use twv_analysis::api::{steady_state, steer, steer_loop, Silent, SteerLoopSettings, SteerVerdict};
+use twv_analysis::control::steer::{SteerLaw, SteerSettings};
+use twv_analysis::integrate::{ClosedLoop, VectorField};
+use twv_analysis::linear::modes::eigenvalues;
+use twv_analysis::linear::SteerGains;
+use twv_analysis::model::{ModelSpec, ResolvedModel};
+use twv_analysis::tune::steer::{tune_steer, SteerTuneOptions};
+use twv_analysis::tune::TuneStatus;
+use twv_ir::Interpreted;
+use twv_model::Model;
+
+fn bicycle() -> ResolvedModel {
+    ModelSpec::shipped("whipple").resolve().unwrap()
+}
+
+/// Meijaard et al. (2007), eq. (5.4): M, C1, K0 (without g), K2 at the benchmark parameters.
+fn benchmark() -> [DMatrix<f64>; 4] {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/meijaard2007.json");
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    ["M", "C1", "K0", "K2"].map(|k| {
+        let rows: Vec<Vec<f64>> = serde_json::from_value(v[k].clone()).unwrap();
+        DMatrix::from_fn(2, 2, |i, j| rows[i][j])
+    })
+}
+
+/// The closed loop of the benchmark equations M q̈ + v C1 q̇ + (g K0 + v² K2) q = (0, T_δ),
+/// T_δ = K (φ, δ, φ̇, δ̇), as a first-order matrix.
+fn benchmark_closed_loop(v: f64, g: &SteerGains) -> DMatrix<f64> {
+    let [m, c1, k0, k2] = benchmark();
+    let minv = m.try_inverse().unwrap();
+    let stiffness = -&minv * (k0 * 9.81 + k2 * (v * v));
+    let damping = -&minv * (c1 * v);
+    let mut a = DMatrix::zeros(4, 4);
+    a[(0, 2)] = 1.0;
+    a[(1, 3)] = 1.0;
+    a.view_mut((2, 0), (2, 2)).copy_from(&stiffness);
+    a.view_mut((2, 2), (2, 2)).copy_from(&damping);
+    for i in 0..2 {
+        for (j, k) in g.row().iter().enumerate() {
+            a[(2 + i, j)] += minv[(i, 1)] * k;
+        }
+    }
+    a
+}
+
+fn sorted(mut e: Vec<Complex<f64>>) -> Vec<Complex<f64>> {
+    e.sort_by(|a, b| a.re.total_cmp(&b.re).then(a.im.total_cmp(&b.im)));
+    e
+}
+
+const GAINS: [SteerGains; 2] = [
+    SteerGains {
+        k_phi: 74.7,
+        k_delta: -53.7,
+        k_phi_dot: 24.0,
+        k_delta_dot: -9.13,
+    },
+    SteerGains {
+        k_phi: 12.0,
+        k_delta: -20.0,
+        k_phi_dot: 2.5,
+        k_delta_dot: -2.2,
+    },
+];
+
+#[test]
+fn closed_loop_eigenvalues_are_the_benchmark_equations_with_the_feedback_substituted() {
+    let model = bicycle();
+    for v in [0.5, 2.0, 4.5, 6.0, 9.0] {
+        let lp = steer_loop(&model, v).unwrap();
+        for g in &GAINS {
+            let ours = sorted(lp.closed_loop(g).unwrap().eigenvalues);
+            let theirs = sorted(eigenvalues(&benchmark_closed_loop(v, g)).unwrap());
+            for (a, b) in ours.iter().zip(&theirs) {
+                // The published matrices carry 13-15 significant digits.
+                assert!(
+                    (a - b).norm() <= 1e-10 * b.norm().max(1.0),
+                    "at {v} m/s with {g:?}: {a} against the benchmark's {b}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_nonlinear_closed_loop_linearised_at_straight_running_is_the_linear_loop() {
+    let model = bicycle();
+    let bike = Interpreted::<9, 4>::new(&model.ir, &model.params).unwrap();
+    let info = bike.info();
+    let modes: Vec<String> = ["phi", "delta", "w_phi", "w_delta"]
+        .map(String::from)
+        .to_vec();
+    let index: Vec<usize> = modes
+        .iter()
+        .map(|m| model.state_index(m).unwrap())
+        .collect();
+    for v in [2.0, 5.0] {
+        let settings = SteerSettings {
+            gains: GAINS[0],
+            saturation: Some(50.0),
+        };
+        let law = SteerLaw::<9, 4>::new(
+            "whipple",
+            info.states,
+            info.inputs,
+            &modes,
+            &settings,
+            [0.0; 4],
+        )
+        .unwrap();
+        let field = ClosedLoop::new(&bike, law);
+        let x: [f64; 9] = steady_state(&model, v).unwrap().try_into().unwrap();
+        let mut jac = [[0.0; 9]; 9];
+        field.jacobian(0.0, &x, &mut jac);
+        let linear = steer_loop(&model, v).unwrap().closed_loop_matrix(&GAINS[0]);
+        for (i, &r) in index.iter().enumerate() {
+            for (j, &c) in index.iter().enumerate() {
+                let (a, b) = (jac[r][c], linear[(i, j)]);
+                assert!(
+                    (a - b).abs() <= 1e-12 * b.abs().max(1.0),
+                    "∂f_{}/∂{} at {v} m/s: {a} against {b}",
+                    modes[i],
+                    modes[j]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_tuned_schedule_meets_the_spec_and_recovers_at_every_speed() {
+    let model = bicycle();
+    let s = SteerLoopSettings {
+        lo: 1.0,
+        hi: 8.0,
+        step: 1.0,
+        ..SteerLoopSettings::default()
+    };
+    let r = steer(&model, &s, &Silent).unwrap();
+    assert_eq!(r.verdict, SteerVerdict::Met, "{}", r.summary());
+    for p in &r.points {
+        let c = p.certificate.as_ref().unwrap();
+        assert!(
+            c.meets_spec && c.analysis.closed_loop.stable,
+            "{} m/s",
+            p.speed
+        );
+        assert!(c.analysis.margins.disk.phase_deg >= 45.0 * (1.0 - 1e-9));
+        // Independently of the certificate: the closed loop's eigenvalues decay.
+        assert!(c.analysis.closed_loop.spectral_abscissa < 0.0);
+        let ride = p.ride.unwrap();
+        assert!(ride.peak.unwrap() > 0.0 && ride.final_value.unwrap() < 0.1 * ride.peak.unwrap());
+    }
+    // Below the weave speed the bicycle is unstable unsteered, above it self-stable: the
+    // schedule spans both, and its gains change continuously (less than their size from one
+    // metre per second to the next).
+    assert!(!r.points[0].self_stable && r.points[4].self_stable);
+    assert!(r.largest_step < 1.0, "{}", r.largest_step);
+}
+
+#[test]
+fn an_infeasible_spec_is_reported_with_its_best_fraction_and_flips_when_loosened() {
+    let model = bicycle();
+    let lp = steer_loop(&model, 0.5).unwrap();
+    let tight = SteerTuneOptions {
+        max_gain_factor: 2.0,
+        ..SteerTuneOptions::default()
+    };
+    let never = || false;
+    let strict = tune_steer(&lp, &"dpm>=60".parse().unwrap(), &tight, &never).unwrap();
+    assert_eq!(strict.status, TuneStatus::Infeasible);
+    assert!(!strict.met() && strict.best_fraction > 0.0 && strict.best_fraction < 1.0);
+    let c = strict.certificate.as_ref().unwrap();
+    assert!(!c.meets_spec && c.analysis.margins.disk.phase_deg < 60.0);
+    let loose = tune_steer(&lp, &"dpm>=30".parse().unwrap(), &tight, &never).unwrap();
+    assert!(loose.met(), "{:?}", loose.status);
+    assert!(loose.certificate.unwrap().analysis.margins.disk.phase_deg >= 30.0 * (1.0 - 1e-9));
+}
+
+#[test]
+fn destabilising_gains_get_a_computed_verdict_and_bad_input_one_line() {
+    let model = bicycle();
+    let s = SteerLoopSettings {
+        lo: 2.0,
+        hi: 6.0,
+        step: 2.0,
+        gains: Some(SteerGains {
+            k_phi: -50.0,
+            ..SteerGains::default()
+        }),
+        ..SteerLoopSettings::default()
+    };
+    let r = steer(&model, &s, &Silent).unwrap();
+    assert_eq!(r.verdict, SteerVerdict::NotMet);
+    for p in &r.points {
+        let c = p.certificate.as_ref().unwrap();
+        assert!(!c.analysis.closed_loop.stable && !p.met, "{} m/s", p.speed);
+    }
+    let error =
+        |s: SteerLoopSettings, m: &ResolvedModel| steer(m, &s, &Silent).unwrap_err().to_string();
+    let negative = error(
+        SteerLoopSettings {
+            lo: -1.0,
+            ..SteerLoopSettings::default()
+        },
+        &model,
+    );
+    assert!(
+        negative.contains("speed") && negative.contains("≥ 0"),
+        "{negative}"
+    );
+    let vehicle = ModelSpec::shipped("vehicle8").resolve().unwrap();
+    let no_steer = error(SteerLoopSettings::default(), &vehicle);
+    assert!(
+        no_steer.contains("T_delta") && !no_steer.contains('\n'),
+        "{no_steer}"
+    );
+    let nan = error(
+        SteerLoopSettings {
+            gains: Some(SteerGains {
+                k_phi: f64::NAN,
+                ..SteerGains::default()
+            }),
+            ..SteerLoopSettings::default()
+        },
+        &model,
+    );
+    assert!(nan.contains("k_phi"), "{nan}");
+    let force = error(
+        SteerLoopSettings {
+            spec: "force<=100".parse().unwrap(),
+            ..SteerLoopSettings::default()
+        },
+        &model,
+    );
+    assert!(force.contains("force"), "{force}");
+}
