@@ -115,7 +115,7 @@ def page_state(driver) -> dict:
         const t = window.twv;
         return {
           updates: t.updates, errors: t.errors, gains: t.gains,
-          tilt: Number(document.getElementById('tilt').value) * Math.PI / 180,
+          tilt: Number(document.getElementById('tilt-num').value),
           phi: t.charts['c-phi'].data.datasets[0].data.map(p => p.y),
           timing: t.timing,
         };
@@ -243,3 +243,99 @@ def test_certified_gains_beyond_a_slider_widen_it_instead_of_being_clamped(
         float(kp.get_attribute("value")), certificate["kp"], abs_tol=10.0
     )
     assert "slider range widened: kp" in browser.find_element("id", "tune-status").text
+
+
+SIZES = {"phone": (390, 844), "desktop": (1400, 1000)}
+
+
+@pytest.mark.parametrize("size", SIZES)
+def test_the_page_reads_well_on_a_phone_and_a_desktop(server, browser, size, tmp_path):
+    """At 390 x 844 (a phone) and 1400 x 1000: no horizontal overflow, every plot at least 300 px
+    wide on the phone, the study's tilt settable exactly (0.1 rad) with the CLI's peak force, the
+    map with its colour bar, Nyquist with equal axes, no label that needs a combining dot."""
+    width, height = SIZES[size]
+    browser.set_window_size(width, height)
+    browser.get(server)
+    wait_for(browser, "return window.twv && window.twv.updates >= 1")
+    inner = browser.execute_script("return window.innerWidth")
+    scroll = browser.execute_script("return document.documentElement.scrollWidth")
+    assert scroll <= inner, (
+        f"{size}: the page is {scroll} px wide in a {inner} px window"
+    )
+    widths = browser.execute_script(
+        "return [...document.querySelectorAll('.plots canvas')]"
+        ".map(c => [c.id, c.getBoundingClientRect().width]);"
+    )
+    assert len(widths) >= 10
+    for name, w in widths:
+        assert w >= 300, f"{size}: {name} is {w:.0f} px wide"
+        assert w <= inner, f"{size}: {name} is wider than the window"
+
+    # The study's tilt, exactly: 0.1 rad in the field, the CLI's peak force for it.
+    updates = browser.execute_script("return window.twv.updates")
+    browser.execute_script(
+        "const f = document.getElementById('tilt-num'); f.value = '0.1';"
+        "f.dispatchEvent(new Event('change'));"
+    )
+    wait_for(browser, f"return window.twv.updates > {updates}")
+    state = browser.execute_script(
+        "return {tilt: Number(document.getElementById('tilt-num').value),"
+        " force: window.twv.last.simulate.result.metrics.peak_force,"
+        " shown: document.getElementById('peak-force').textContent,"
+        " degrees: document.getElementById('tilt-deg').textContent, gains: window.twv.gains};"
+    )
+    assert state["tilt"] == 0.1
+    g = state["gains"]
+    out = twv(
+        "sim",
+        "--json",
+        "--tilt",
+        "0.1",
+        "--gains",
+        f"{g['kp']!r},{g['ki']!r},{g['kd']!r}",
+    )
+    assert out.returncode == 0, out.stderr
+    cli = json.loads(out.stdout)["metrics"]["peak_force"]
+    assert state["force"] == cli, (state, cli)
+    # Shown as the page formats it (4 significant digits, like JavaScript's toPrecision).
+    assert state["shown"] == f"{cli:.4g} N", (state, cli)
+    assert state["degrees"] == "(5.73°)", state
+
+    # Equal axes on the Nyquist plot: one unit as many pixels across as up.
+    px = browser.execute_script(
+        "const c = window.twv.charts['c-nyquist'];"
+        "return [c.scales.x.getPixelForValue(1) - c.scales.x.getPixelForValue(0),"
+        " c.scales.y.getPixelForValue(0) - c.scales.y.getPixelForValue(1)];"
+    )
+    assert abs(px[0] - px[1]) <= 0.02 * px[0], px
+
+    # Labels the fonts surely have: no combining dot (it was lost, reading Φ̇ as Φ).
+    texts = browser.execute_script(
+        "return Object.values(window.twv.charts).flatMap(c => [c.options.plugins.title.text,"
+        " c.options.scales.x.title.text, c.options.scales.y.title.text,"
+        " ...c.data.datasets.map(d => d.label)]).concat([document.body.innerText]);"
+    )
+    assert not any("\u0307" in t for t in texts), [t for t in texts if "\u0307" in t]
+
+    # The map with its colour bar: red at the top (λ1 > 0), blue at the bottom.
+    browser.find_element("id", "map").click()
+    wait_for(
+        browser,
+        "return window.twv.mapColorBar && "
+        "document.getElementById('map-progress').value == 1",
+        timeout=120,
+    )
+    bar = browser.execute_script(
+        "const c = document.getElementById('c-map'), b = window.twv.mapColorBar;"
+        "const r = window.devicePixelRatio || 1, g = c.getContext('2d');"
+        "const at = (y) => Array.from(g.getImageData((b.x + b.width / 2) * r, y * r, 1, 1).data);"
+        "return {top: at(12), bottom: at(c.clientHeight - 50), min: b.min, max: b.max,"
+        " width: c.getBoundingClientRect().width};"
+    )
+    assert bar["min"] < 0 < bar["max"], bar
+    assert bar["top"][0] > bar["top"][2] and bar["bottom"][2] > bar["bottom"][0], bar
+    assert bar["width"] >= 300, bar
+
+    ARTEFACTS.mkdir(parents=True, exist_ok=True)
+    browser.save_screenshot(str(ARTEFACTS / f"serve-page-{size}.png"))
+    browser.set_window_size(1500, 2000)

@@ -41,7 +41,10 @@ function controller() {
   };
 }
 
-const tilt = () => (num("tilt") * Math.PI) / 180;
+// The initial tilt in rad (the unit of every angle twv takes and prints): the number field is
+// exact (the study's 0.1 rad), the slider moves in 0.001 rad steps; degrees are shown beside.
+const tilt = () => num("tilt-num");
+const degrees = (rad) => `(${((rad * 180) / Math.PI).toFixed(2)}°)`;
 const loopOptions = () => ({ lag: num("lag"), delay: num("delay") });
 
 // --- charts -----------------------------------------------------------------------------------
@@ -91,15 +94,18 @@ const xy = (xs, ys) => xs.map((x, i) => ({ x, y: ys[i] }));
 const vline = (x, lo, hi) => [{ x, y: lo }, { x, y: hi }];
 
 function setupCharts() {
+  // Text at least 12 px: legible on a phone.
+  Chart.defaults.font.size = 12;
   chart("c-phi", "pitch Φ", "t [s]", "Φ [rad]");
-  chart("c-phidot", "pitch rate Φ̇", "t [s]", "w_y [rad/s]");
+  // "dΦ/dt", not a combining dot: Φ̇ lost its dot with the fonts a headless Debian has.
+  chart("c-phidot", "pitch rate dΦ/dt", "t [s]", "dΦ/dt = w_y [rad/s]");
   chart("c-force", "base force F", "t [s]", "F [N]");
   chart("c-vx", "forward speed v_x", "t [s]", "v_x [m/s]");
-  chart("c-phase", "phase portrait (±tilt, ±2·tilt)", "Φ [rad]", "Φ̇ [rad/s]");
+  chart("c-phase", "phase portrait (±tilt, ±2·tilt)", "Φ [rad]", "dΦ/dt [rad/s]");
   chart("c-poles", "closed-loop poles", "Re s [1/s]", "Im s [1/s]", { scatter: true });
   chart("c-mag", "Bode magnitude of L(jω)", "ω [rad/s]", "|L| [dB]", { logX: true });
   chart("c-arg", "Bode phase of L(jω)", "ω [rad/s]", "∠L [°]", { logX: true });
-  chart("c-nyquist", "Nyquist (|L| ≤ 5)", "Re L", "Im L");
+  chart("c-nyquist", "Nyquist (|L| ≤ 5, equal axes)", "Re L [1]", "Im L [1]");
 }
 
 // --- one update ----------------------------------------------------------------------------
@@ -108,7 +114,7 @@ function showSimulation(answer) {
   const s = answer.series;
   const r = answer.result;
   draw("c-phi", [{ label: "Φ", data: xy(s.t, s.phi) }, { label: "Φ_ref", data: xy(s.t, s.phi_ref), dash: [4, 3] }]);
-  draw("c-phidot", [{ label: "Φ̇", data: xy(s.t, s.w_y) }]);
+  draw("c-phidot", [{ label: "dΦ/dt", data: xy(s.t, s.w_y) }]);
   draw("c-force", [{ label: "F", data: xy(s.t, s.F) }, { label: "F command", data: xy(s.t, s.F_cmd), dash: [4, 3] }]);
   draw("c-vx", [{ label: "v_x", data: xy(s.t, s.v_x) }]);
   const m = r.metrics;
@@ -177,6 +183,29 @@ function showMargins(answer) {
   // The disk margin's exclusion disk (from the server): L stays outside, touching it.
   if (f.disk) nyquist.push({ label: "disk margin", data: circle(f.disk.center, f.disk.radius), color: "#9467bd", dash: [2, 2] });
   draw("c-nyquist", nyquist);
+  equalAxes("c-nyquist", nyquist.flatMap((d) => d.data));
+}
+
+// One unit of x as long on the screen as one unit of y (a circle drawn round), around `points`.
+function equalAxes(id, points) {
+  const c = charts[id];
+  const xs = points.map((p) => p.x), ys = points.map((p) => p.y);
+  const [x0, x1, y0, y1] = [Math.min(...xs), Math.max(...xs), Math.min(...ys), Math.max(...ys)];
+  // Twice: the tick labels the first pass chooses change the plot area the second one fits.
+  for (let pass = 0; pass < 2; pass++) {
+    const a = c.chartArea;
+    const w = a.right - a.left, h = a.bottom - a.top;
+    const perPixel = 1.05 * Math.max((x1 - x0) / w, (y1 - y0) / h);
+    const cx = (x0 + x1) / 2, cy = (y0 + y1) / 2;
+    // Round ticks, the same step on both axes, and no odd numbers at the ends.
+    const raw = (perPixel * Math.max(w, h)) / 6;
+    const decade = 10 ** Math.floor(Math.log10(raw));
+    const stepSize = [1, 2, 5, 10].map((m) => m * decade).find((s) => s >= raw);
+    const ticks = { stepSize, includeBounds: false };
+    Object.assign(c.options.scales.x, { min: cx - (perPixel * w) / 2, max: cx + (perPixel * w) / 2, ticks });
+    Object.assign(c.options.scales.y, { min: cy - (perPixel * h) / 2, max: cy + (perPixel * h) / 2, ticks });
+    c.update("none");
+  }
 }
 
 function showLyapunov(answer) {
@@ -247,7 +276,7 @@ async function update() {
 let queued = false;
 function schedule() {
   for (const id of ["kp", "ki", "kd"]) $(`${id}-out`).textContent = $(id).value;
-  $("tilt-out").textContent = $("tilt").value;
+  $("tilt-deg").textContent = degrees(tilt());
   if (queued) return;
   queued = true;
   requestAnimationFrame(() => {
@@ -259,7 +288,8 @@ function schedule() {
 // --- the map ---------------------------------------------------------------------------------
 
 const MAP_N = 20;
-const MAP_PAD = { l: 50, b: 30, t: 5, r: 5 }; // room for the axis labels [px]
+// Room for the axes' ticks and labels, and the colour bar on the right [CSS px].
+const MAP_PAD = { l: 62, b: 44, t: 8, r: 92 };
 let map = null; // { kp: [..], kd: [..], points: [[point per kp] per kd row] }
 
 function mapAxes() {
@@ -300,40 +330,92 @@ async function computeMap() {
   $("map").disabled = false;
 }
 
-function drawMap() {
+// The canvas at the size the page gives it, sharp on high-density screens; sizes in CSS px.
+function mapCanvas() {
   const canvas = $("c-map");
+  const ratio = window.devicePixelRatio || 1;
+  const w = canvas.clientWidth, h = canvas.clientHeight;
+  if (canvas.width !== Math.round(w * ratio) || canvas.height !== Math.round(h * ratio)) {
+    canvas.width = Math.round(w * ratio);
+    canvas.height = Math.round(h * ratio);
+  }
   const g = canvas.getContext("2d");
-  g.clearRect(0, 0, canvas.width, canvas.height);
+  g.setTransform(ratio, 0, 0, ratio, 0, 0);
+  return { canvas, g, w, h, plotW: w - MAP_PAD.l - MAP_PAD.r, plotH: h - MAP_PAD.b - MAP_PAD.t };
+}
+
+const niceTicks = (hi, n = 4) => Array.from({ length: n + 1 }, (_, i) => (hi * i) / n);
+
+function mapColor(value, scale) {
+  if (value === null) return "#bbb";
+  const a = Math.min(1, Math.abs(value) / scale) * 0.85 + 0.15;
+  return value < 0 ? `rgba(31,119,180,${a})` : `rgba(214,39,40,${a})`;
+}
+
+function drawMap() {
+  const { g, w, h, plotW, plotH } = mapCanvas();
+  g.clearRect(0, 0, w, h);
   if (!map) return;
-  const w = (canvas.width - MAP_PAD.l - MAP_PAD.r) / MAP_N, h = (canvas.height - MAP_PAD.b - MAP_PAD.t) / MAP_N;
+  const cw = plotW / MAP_N, ch = plotH / MAP_N;
   const values = map.rows.flat().filter((p) => p.value !== null).map((p) => Math.abs(p.value));
   const scale = Math.max(1e-9, ...values);
+  twv.mapScale = scale;
   map.rows.forEach((row, j) => row.forEach((p, i) => {
-    let color = "#bbb";
-    if (p.value !== null) {
-      const a = Math.min(1, Math.abs(p.value) / scale) * 0.85 + 0.15;
-      color = p.value < 0 ? `rgba(31,119,180,${a})` : `rgba(214,39,40,${a})`;
-    }
-    g.fillStyle = color;
-    g.fillRect(MAP_PAD.l + i * w, canvas.height - MAP_PAD.b - (j + 1) * h, w - 1, h - 1);
+    g.fillStyle = mapColor(p.value, scale);
+    g.fillRect(MAP_PAD.l + i * cw, MAP_PAD.t + plotH - (j + 1) * ch, cw - 1, ch - 1);
   }));
   g.fillStyle = "#222";
+  g.strokeStyle = "#222";
   g.font = "12px sans-serif";
-  g.fillText(`Kp 0 … ${map.kpMax} N/rad`, MAP_PAD.l, canvas.height - 8);
+  // Ticks with values on both axes (the cells are centred on the axis values).
+  g.textAlign = "center";
+  for (const v of niceTicks(map.kpMax)) {
+    const x = MAP_PAD.l + (v / map.kpMax) * plotW;
+    g.fillRect(x, MAP_PAD.t + plotH, 1, 5);
+    g.fillText(String(Math.round(v)), x, MAP_PAD.t + plotH + 17);
+  }
+  g.fillText("Kp [N/rad]", MAP_PAD.l + plotW / 2, h - 6);
+  g.textAlign = "right";
+  for (const v of niceTicks(map.kdMax)) {
+    const y = MAP_PAD.t + plotH - (v / map.kdMax) * plotH;
+    g.fillRect(MAP_PAD.l - 5, y, 5, 1);
+    g.fillText(String(Math.round(v)), MAP_PAD.l - 7, y + 4);
+  }
   g.save();
-  g.translate(14, canvas.height - MAP_PAD.b);
+  g.translate(13, MAP_PAD.t + plotH / 2);
   g.rotate(-Math.PI / 2);
-  g.fillText(`Kd 0 … ${map.kdMax} N s/rad`, 0, 0);
+  g.textAlign = "center";
+  g.fillText("Kd [N s/rad]", 0, 0);
   g.restore();
+  // The colour bar: λ1 from −scale (blue) through 0 to +scale (red), with its ticks.
+  const barX = MAP_PAD.l + plotW + 16, barW = 14, steps = 60;
+  for (let k = 0; k < steps; k++) {
+    const v = scale - (2 * scale * (k + 0.5)) / steps;
+    g.fillStyle = mapColor(v, scale);
+    g.fillRect(barX, MAP_PAD.t + (k * plotH) / steps, barW, plotH / steps + 1);
+  }
+  g.fillStyle = "#222";
+  g.textAlign = "left";
+  for (const f of [1, 0.5, 0, -0.5, -1]) {
+    const y = MAP_PAD.t + ((1 - f) / 2) * plotH;
+    g.fillRect(barX + barW, y, 4, 1);
+    g.fillText((f * scale).toPrecision(2), barX + barW + 6, y + 4);
+  }
+  g.save();
+  g.translate(w - 6, MAP_PAD.t + plotH / 2);
+  g.rotate(-Math.PI / 2);
+  g.textAlign = "center";
+  g.fillText("λ1 [1/s]", 0, 0);
+  g.restore();
+  twv.mapColorBar = { x: barX, width: barW, min: -scale, max: scale };
   markMap();
 }
 
 function markMap() {
   if (!map) return;
-  const canvas = $("c-map");
-  const g = canvas.getContext("2d");
-  const x = MAP_PAD.l + (num("kp") / map.kpMax) * (canvas.width - MAP_PAD.l - MAP_PAD.r);
-  const y = canvas.height - MAP_PAD.b - (num("kd") / map.kdMax) * (canvas.height - MAP_PAD.b - MAP_PAD.t);
+  const { g, plotW, plotH } = mapCanvas();
+  const x = MAP_PAD.l + (num("kp") / map.kpMax) * plotW;
+  const y = MAP_PAD.t + plotH - (num("kd") / map.kdMax) * plotH;
   g.strokeStyle = "#000";
   g.lineWidth = 2;
   g.beginPath();
@@ -343,10 +425,10 @@ function markMap() {
 
 function clickMap(event) {
   if (!map) return;
-  const canvas = $("c-map");
+  const { canvas, plotW, plotH } = mapCanvas();
   const rect = canvas.getBoundingClientRect();
-  const fx = (event.clientX - rect.left - MAP_PAD.l) / (canvas.width - MAP_PAD.l - MAP_PAD.r);
-  const fy = (canvas.height - MAP_PAD.b - (event.clientY - rect.top)) / (canvas.height - MAP_PAD.b - MAP_PAD.t);
+  const fx = (event.clientX - rect.left - MAP_PAD.l) / plotW;
+  const fy = (MAP_PAD.t + plotH - (event.clientY - rect.top)) / plotH;
   if (fx < 0 || fx > 1 || fy < 0 || fy > 1) return;
   const i = Math.min(MAP_N - 1, Math.floor(fx * MAP_N)), j = Math.min(MAP_N - 1, Math.floor(fy * MAP_N));
   $("kp").value = map.kp[i];
@@ -398,7 +480,9 @@ function paramFields(model) {
   for (const p of model.params) {
     const div = document.createElement("div");
     div.className = "param";
-    div.innerHTML = `<label title="${p.description}">${p.name} [${p.unit}] <input type="number" step="any" id="param-${p.name}"></label><div class="field-error" id="err-${p.name}"></div>`;
+    // The description in view, not only as a tooltip (a touch screen shows no tooltips).
+    div.innerHTML = `<label>${p.name} [${p.unit}] <input type="number" step="any" id="param-${p.name}"></label><div class="desc"></div><div class="field-error" id="err-${p.name}"></div>`;
+    div.querySelector(".desc").textContent = p.description;
     box.append(div);
     const input = div.querySelector("input");
     input.value = p.value;
@@ -424,10 +508,28 @@ async function start() {
   $("kp").value = g.kp;
   $("ki").value = g.ki;
   $("kd").value = g.kd;
-  $("tilt").value = ((model.defaults.simulate.phi0 * 180) / Math.PI).toFixed(1);
+  const phi0 = model.defaults.simulate.phi0;
+  $("tilt-num").value = String(phi0);
+  $("tilt").value = String(phi0);
+  $("defaults").textContent =
+    `It starts at the study's PD (Kp = ${g.kp} N/rad, Kd = ${g.kd} N s/rad), its setpoint 0.03·sin Φ ` +
+    `and its initial tilt of ${phi0} rad ${degrees(phi0)}, with the parameters of ${model.params_origin}.`;
   paramFields(model);
   setupCharts();
-  for (const id of ["kp", "ki", "kd", "tilt"]) $(id).addEventListener("input", schedule);
+  for (const id of ["kp", "ki", "kd"]) $(id).addEventListener("input", schedule);
+  // Slider and field move together; the field holds the exact value.
+  $("tilt").addEventListener("input", () => {
+    $("tilt-num").value = $("tilt").value;
+    schedule();
+  });
+  $("tilt-num").addEventListener("change", () => {
+    $("tilt").value = $("tilt-num").value;
+    schedule();
+  });
+  window.addEventListener("resize", () => {
+    drawMap();
+    if (twv.last.margins) showMargins(twv.last.margins);
+  });
   for (const id of ["setpoint", "saturation", "filter", "lag", "delay"]) $(id).addEventListener("change", schedule);
   $("map").addEventListener("click", computeMap);
   $("c-map").addEventListener("click", clickMap);

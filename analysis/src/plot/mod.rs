@@ -2,7 +2,7 @@
 //! the same drawing gives the SVG (text stays text; the HTML report inlines it) and the PNG
 //! beside it (plotters' bitmap backend, glyphs by ab_glyph, encoded by the png crate).
 //!
-//! Every text is at least 13 px at the size a figure declares; the SVG is drawn at
+//! Every text is at least 12 px at the size a figure declares; the SVG is drawn at
 //! [`SUPERSAMPLE`] times that size and scaled back by its viewBox, because plotters places
 //! everything on whole pixels (at 1× lines look stepped).
 
@@ -33,11 +33,12 @@ pub const SUPERSAMPLE: u32 = 4;
 pub const PNG_SCALE: u32 = 2;
 
 /// Font sizes at the declared (1×) size, as plotters takes them: it draws text at 1/1.24 of
-/// the size given, so these are 16, 13 and 11.3 px tall glyph boxes — at least 10 px even when
-/// the report scales a figure to 90 % to fit the page.
-pub(crate) const TITLE_PX: u32 = 20;
-pub(crate) const LABEL_PX: u32 = 16;
-pub(crate) const TICK_PX: u32 = 14;
+/// the size given, so these are 16.9, 13.7 and 12.1 px tall glyph boxes — at least 10 px even
+/// where the report scales its widest figure (1120 px) to its 1000 px column
+/// (`tests/all/report.rs` holds every figure to that).
+pub(crate) const TITLE_PX: u32 = 21;
+pub(crate) const LABEL_PX: u32 = 17;
+pub(crate) const TICK_PX: u32 = 15;
 
 /// A font of `px` (at 1×) on a canvas drawn at `k` ×.
 pub(crate) fn font(px: u32, k: u32) -> (&'static str, u32) {

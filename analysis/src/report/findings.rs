@@ -29,8 +29,10 @@ pub struct Check {
     pub name: String,
     /// Whether it passed.
     pub passed: bool,
-    /// The numbers behind it, with the threshold.
+    /// What it found, in a sentence a newcomer reads, with the threshold.
     pub detail: String,
+    /// The technical detail behind it (the page shows it on request; may be empty).
+    pub more: String,
 }
 
 /// A statement about the vehicle, with the verdict it reaches.
@@ -40,8 +42,19 @@ pub struct Finding {
     pub topic: String,
     /// The verdict in a few words.
     pub verdict: String,
-    /// The sentence, with its numbers and threshold.
+    /// The sentence, with its numbers (rounded to what the test resolves) and threshold.
     pub text: String,
+    /// The technical detail behind it (the page shows it on request; may be empty).
+    pub more: String,
+}
+
+/// `v` with `digits` significant digits, in plain decimal notation (0.0079, 374, 12).
+fn significant(v: f64, digits: i32) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let decimals = (digits - 1 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
 }
 
 fn finding(topic: &str, verdict: &str, text: String) -> Finding {
@@ -49,6 +62,7 @@ fn finding(topic: &str, verdict: &str, text: String) -> Finding {
         topic: topic.into(),
         verdict: verdict.into(),
         text,
+        more: String::new(),
     }
 }
 
@@ -83,6 +97,7 @@ pub fn audit_check(audits: &[AuditReport]) -> Check {
                 .collect();
             format!("FAILED for {}", first.join("; "))
         },
+        more: String::new(),
     }
 }
 
@@ -94,8 +109,13 @@ pub fn trace_check(s: &SpectrumResult) -> Check {
             name,
             passed: residual <= TRACE_TOLERANCE,
             detail: format!(
-                "Σλ = {:+.10e}, ⟨tr J⟩ = {trace:+.10e}: relative difference {residual:.1e} \
+                "the exponents add up to the trajectory's average divergence ⟨tr ∂f/∂x⟩ = \
+                 {trace:.4} 1/s, as every full spectrum must: they agree to {residual:.0e} \
                  (must be ≤ {TRACE_TOLERANCE:.0e})",
+            ),
+            more: format!(
+                "Σλ = {:+.10e} 1/s, ⟨tr J⟩ = {trace:+.10e} 1/s; relative difference {residual:.2e}, \
+                 relative to max(max|λ|, 1/T)",
                 s.result.sum
             ),
         },
@@ -103,6 +123,7 @@ pub fn trace_check(s: &SpectrumResult) -> Check {
             name,
             passed: false,
             detail: "the trace quadrature was off".into(),
+            more: String::new(),
         },
     }
 }
@@ -118,15 +139,26 @@ pub fn open_loop_finding(preset: &SpectrumResult, horizons: &[(f64, Vec<f64>)]) 
         "At the study's {:.0} s horizon: {class}.",
         preset.result.t_total
     );
+    let mut more = String::new();
     let verdict = match (horizons.first(), horizons.last()) {
         (Some((t1, l1)), Some((t2, l2))) if t2 > t1 => {
             let (a, b) = (max_abs(l1), max_abs(l2));
             let ratio = if a > 0.0 { b / a } else { 0.0 };
             let transient = b <= a * (t1 / t2).sqrt();
             text += &format!(
-                " Over longer horizons the largest |λ| goes from {a:.4} at {t1:.0} s to {b:.4} at \
-                 {t2:.0} s (×{ratio:.3}; a transient falls like 1/T, ×{:.3}; verdict threshold \
-                 T^(−1/2), ×{:.3}).",
+                " Over longer horizons the largest |λ| shrinks from {a:.2} 1/s at {t1:.0} s to \
+                 {} 1/s at {t2:.0} s: {}.",
+                significant(b, 2),
+                if transient {
+                    "it fades like a finite-time transient, as a conservative system's must"
+                } else {
+                    "it does not fade: the exponents persist"
+                }
+            );
+            more = format!(
+                "max|λ| at {t2:.0} s / at {t1:.0} s = {ratio:.3}; a transient falls like 1/T \
+                 (×{:.3} here); the verdict is \"transient\" when the ratio is at most \
+                 (T1/T2)^(1/2) = {:.3}.",
                 t1 / t2,
                 (t1 / t2).sqrt()
             );
@@ -140,7 +172,10 @@ pub fn open_loop_finding(preset: &SpectrumResult, horizons: &[(f64, Vec<f64>)]) 
         }
         _ => class.kind(),
     };
-    finding("open-loop Lyapunov spectrum", verdict, text)
+    Finding {
+        more,
+        ..finding("open-loop Lyapunov spectrum", verdict, text)
+    }
 }
 
 /// The tilt recovery of `sim` (and the drift after it).

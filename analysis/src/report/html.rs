@@ -38,6 +38,36 @@ pub fn svg_size(svg: &str) -> Option<(u32, u32)> {
     Some((attr("width")?, attr("height")?))
 }
 
+/// The technical detail behind a summary line, one click away.
+fn more(text: &str) -> String {
+    if text.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " <details><summary>details</summary>{}</details>",
+            escape(text)
+        )
+    }
+}
+
+/// A cell that reads as a number (with at most a unit after it), right-aligned in tables.
+fn is_number(cell: &str) -> bool {
+    let first = cell.split_whitespace().next().unwrap_or("");
+    let digits = first.trim_start_matches(['+', '-', '−', '[', '(']);
+    cell.split_whitespace().count() <= 2
+        && digits
+            .chars()
+            .next()
+            .is_some_and(|c| c.is_ascii_digit() || c == '.')
+}
+
+/// The widest the page's text column gets [px] (a comfortable line length for prose); figures
+/// are shown at their own width up to this, and scaled down to it beyond.
+pub const PAGE_WIDTH: u32 = 1000;
+
+/// The page's padding on each side [px].
+pub const PAGE_PADDING: u32 = 16;
+
 /// The page being built.
 #[derive(Default)]
 pub struct Page {
@@ -63,6 +93,7 @@ impl Page {
         let _ = writeln!(self.body, "<pre>{}</pre>", escape(text));
     }
 
+    /// A table: numbers right-aligned (their digits line up), words left-aligned.
     pub fn table(&mut self, header: &[&str], rows: &[Vec<String>]) {
         let _ = write!(self.body, "<table><thead><tr>");
         for h in header {
@@ -72,7 +103,8 @@ impl Page {
         for r in rows {
             let _ = write!(self.body, "<tr>");
             for c in r {
-                let _ = write!(self.body, "<td>{}</td>", escape(c));
+                let class = if is_number(c) { " class=\"n\"" } else { "" };
+                let _ = write!(self.body, "<td{class}>{}</td>", escape(c));
             }
             let _ = write!(self.body, "</tr>");
         }
@@ -107,20 +139,22 @@ impl Page {
         for c in checks {
             let _ = write!(
                 self.body,
-                "<li class=\"{}\"><strong>check — {}: {}</strong>. {}</li>",
+                "<li class=\"{}\"><strong>check — {}: {}</strong>. {}{}</li>",
                 if c.passed { "pass" } else { "fail" },
                 escape(&c.name),
                 if c.passed { "passed" } else { "FAILED" },
-                escape(&c.detail)
+                escape(&c.detail),
+                more(&c.more)
             );
         }
         for f in findings {
             let _ = write!(
                 self.body,
-                "<li><strong>{}: {}</strong>. {}</li>",
+                "<li><strong>{}: {}</strong>. {}{}</li>",
                 escape(&f.topic),
                 escape(&f.verdict),
-                escape(&f.text)
+                escape(&f.text),
+                more(&f.more)
             );
         }
         let _ = writeln!(self.body, "</ul></div>");
@@ -148,9 +182,10 @@ impl Page {
     pub fn finish(self, title: &str) -> String {
         format!(
             "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\
-             <style>body{{font-family:sans-serif;max-width:1250px;margin:auto;padding:1em;line-height:1.45}}\
+             <style>body{{font-family:sans-serif;max-width:{PAGE_WIDTH}px;margin:auto;padding:{PAGE_PADDING}px;line-height:1.45}}\
              table{{border-collapse:collapse;margin:0.5em 0}}td,th{{border:1px solid #bbb;padding:2px 8px;\
-             font-size:0.9em;text-align:right}}th{{background:#eee}}pre{{background:#f6f6f6;padding:0.5em;\
+             font-size:0.9em;text-align:left}}td.n{{text-align:right}}th{{background:#eee}}\
+             details{{display:inline}}summary{{cursor:pointer;color:#446}}pre{{background:#f6f6f6;padding:0.5em;\
              overflow-x:auto;font-size:0.85em}}figure{{margin:1em 0}}figcaption{{font-size:0.9em;color:#444}}\
              figure svg{{width:100%;height:auto}}.failed{{border:2px solid #c00;background:#fee;\
              padding:0.5em 1em;margin:1em 0}}.summary{{background:#f4f8ff;padding:0.3em 1em;\

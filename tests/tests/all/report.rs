@@ -91,3 +91,63 @@ fn the_recovery_finding_follows_the_run() {
     assert_eq!(recovery_finding(&run(3860.0)).verdict, "recovers");
     assert_eq!(recovery_finding(&run(800.0)).verdict, "falls");
 }
+
+/// The smallest text of every figure on the report's page, in CSS pixels where the page shows
+/// it: the SVG's smallest font size, divided by its supersampling (viewBox width over declared
+/// width), times the figure's scale (its declared width, shrunk to a `column` px wide page).
+fn smallest_text_px(html: &str, column: f64) -> Vec<(String, f64)> {
+    let attr = |tag: &str, name: &str| -> Option<String> {
+        let start = tag.find(&format!("{name}=\""))? + name.len() + 2;
+        Some(tag[start..].split('"').next()?.to_string())
+    };
+    html.split("<figure ")
+        .skip(1)
+        .map(|figure| {
+            let open = &figure[..figure.find('>').unwrap()];
+            let file = attr(open, "data-file").unwrap();
+            let declared: f64 = attr(open, "data-width").unwrap().parse().unwrap();
+            let svg = &figure[figure.find("<svg").unwrap()..figure.find("</svg>").unwrap()];
+            let svg_open = &svg[..svg.find('>').unwrap()];
+            let view_width: f64 = attr(svg_open, "viewBox")
+                .unwrap()
+                .split_whitespace()
+                .nth(2)
+                .unwrap()
+                .parse()
+                .unwrap();
+            let smallest = svg
+                .split("font-size=\"")
+                .skip(1)
+                .map(|s| s.split('"').next().unwrap().parse::<f64>().unwrap())
+                .fold(f64::INFINITY, f64::min);
+            let scale = (column / declared).min(1.0);
+            (file, smallest * declared / view_width * scale)
+        })
+        .collect()
+}
+
+#[test]
+fn every_figure_text_is_at_least_10_px_where_the_report_shows_it() {
+    let report = build(
+        &ReportSettings {
+            quick: true,
+            ..ReportSettings::default()
+        },
+        &Silent,
+    )
+    .unwrap();
+    let column = f64::from(twv_analysis::report::PAGE_WIDTH);
+    assert!(report.html.contains(&format!("max-width:{column}px")));
+    let sizes = smallest_text_px(&report.html, column);
+    assert!(sizes.len() >= 10, "{sizes:?}");
+    for (file, px) in &sizes {
+        assert!(
+            *px >= 10.0,
+            "{file}: its smallest text is {px:.1} px on the page"
+        );
+    }
+    // The measure flips where it should: the widest figure in a column of 600 px reads small.
+    assert!(smallest_text_px(&report.html, 600.0)
+        .iter()
+        .any(|(_, px)| *px < 10.0));
+}
