@@ -78,6 +78,7 @@ export RUSTC_WORKSPACE_WRAPPER="$PWD/.ci/clippy-rustc"
 features=(--features twv-cli/jit)
 profile=(--profile release)
 cargo test --workspace --no-run "${profile[@]}" "${features[@]}"
+step "cargo build of the libraries no test links (export runtime, firmware) and the benchmarks"
 cargo build --workspace --lib --benches "${profile[@]}" "${features[@]}"
 twv="$PWD/target/release/twv"
 
