@@ -55,6 +55,8 @@ step "pytest modeling/"
 
 step "IR freshness (generated/ir is what the modeling code derives today)"
 "$py" -m twv_modeling check
+# vehicles/bicycles is what the pinned bicycleparameters' data set converts to today.
+"$py" -m twv_modeling bicycles --check
 
 step "cargo fmt --check"
 cargo fmt --all --check

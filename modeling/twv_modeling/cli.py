@@ -1,4 +1,4 @@
-"""Command line: `python -m twv_modeling derive|check|summary`.
+"""Command line: `python -m twv_modeling derive|check|summary|export-c|bicycles`.
 
 Errors are one line on stderr and a non-zero exit; IR files are written atomically.
 """
@@ -101,6 +101,26 @@ def cmd_export_c(args) -> int:
     return 0
 
 
+def cmd_bicycles(args) -> int:
+    from . import bicycles
+
+    out = Path(args.out_dir)
+    if args.check:
+        stale = bicycles.stale(out)
+        for path in stale:
+            print(
+                f"stale bicycle file: {path} (run `python -m twv_modeling bicycles`)",
+                file=sys.stderr,
+            )
+        if stale:
+            return 1
+        print(f"bicycle files up to date: {len(bicycles.available())} in {out}")
+        return 0
+    for path in bicycles.write_all(out):
+        print(f"wrote {path}")
+    return 0
+
+
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="python -m twv_modeling", description=__doc__)
     sub = ap.add_subparsers(dest="command", required=True)
@@ -127,6 +147,13 @@ def parser() -> argparse.ArgumentParser:
         "--hand", action="store_true", help="also the hand-written peer (vehicle8: `_hand`)"
     )
     e.set_defaults(run=cmd_export_c)
+    b = sub.add_parser(
+        "bicycles",
+        help="write the measured bicycles of bicycleparameters' data set as parameter files",
+    )
+    b.add_argument("--out-dir", default=str(REPO_ROOT / "vehicles" / "bicycles"))
+    b.add_argument("--check", action="store_true", help="fail, naming them, if the files differ")
+    b.set_defaults(run=cmd_bicycles)
     return ap
 
 

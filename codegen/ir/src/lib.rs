@@ -34,7 +34,7 @@ pub use infix::{formulas, Formulas};
 pub use interp::{visit_interpreted, Interpreted, UnsupportedSize, VisitError, MAX_NU, MAX_NX};
 pub use native::NativeCode;
 pub use ops::{BinaryOp, UnaryOp};
-pub use params::{check_values, load_params, parse_params};
+pub use params::{check_values, load_params, parse_params, parse_uncertainty, UNCERTAINTY};
 pub use types::{
     Arg, Function, Golden, Instr, Ir, Kind, Mechanics, Output, Param, ParamKind, Signal,
     SteadyMotion, FORMAT,

@@ -1,5 +1,7 @@
 //! Parameter files: a TOML table read into values in the IR's parameter order, using each
 //! parameter's `key` and `index`, and validated by its `kind` (see generated/ir/README.md).
+//! An optional `[uncertainty]` table gives one standard deviation per key (the same shape as
+//! its value): it is not a value, and [`parse_uncertainty`] reads it for Monte Carlo runs.
 
 use std::path::Path;
 
@@ -35,11 +37,30 @@ pub fn check_values(values: &[f64], file: &str, params: &[Param]) -> Result<(), 
     })
 }
 
-fn parse_inner(text: &str, params: &[Param]) -> Result<Vec<f64>, ParamProblem> {
+/// The key of the standard deviations' table.
+pub const UNCERTAINTY: &str = "uncertainty";
+
+/// The standard deviation of each parameter (IR order; 0 where the file gives none) from the
+/// `[uncertainty]` table of a parameter file's text, checked: known keys, the value's shape,
+/// finite and ≥ 0. The values themselves are checked too (the file must be a valid file).
+pub fn parse_uncertainty(text: &str, file: &str, params: &[Param]) -> Result<Vec<f64>, ParamError> {
+    let err = |problem| ParamError {
+        file: file.to_string(),
+        problem,
+    };
+    let (table, _) = read_table(text, params).map_err(err)?;
+    uncertainty_of(&table, params).map_err(err)
+}
+
+/// The TOML table of a parameter file and its values, checked.
+fn read_table(text: &str, params: &[Param]) -> Result<(Table, Vec<f64>), ParamProblem> {
     let table: Table = text
         .parse()
         .map_err(|e: toml::de::Error| ParamProblem::Syntax(e.to_string().trim().to_string()))?;
-    if let Some(key) = table.keys().find(|k| !params.iter().any(|p| &p.key == *k)) {
+    if let Some(key) = table
+        .keys()
+        .find(|k| *k != UNCERTAINTY && !params.iter().any(|p| &p.key == *k))
+    {
         return Err(ParamProblem::UnknownKey(key.clone()));
     }
     let values = params
@@ -47,7 +68,57 @@ fn parse_inner(text: &str, params: &[Param]) -> Result<Vec<f64>, ParamProblem> {
         .map(|p| value_of(&table, p, params))
         .collect::<Result<Vec<_>, _>>()?;
     check_all(&values, params)?;
-    Ok(values)
+    uncertainty_of(&table, params)?;
+    Ok((table, values))
+}
+
+fn parse_inner(text: &str, params: &[Param]) -> Result<Vec<f64>, ParamProblem> {
+    read_table(text, params).map(|(_, values)| values)
+}
+
+/// The `[uncertainty]` table's standard deviations in IR order (0 where absent).
+fn uncertainty_of(table: &Table, params: &[Param]) -> Result<Vec<f64>, ParamProblem> {
+    let Some(raw) = table.get(UNCERTAINTY) else {
+        return Ok(vec![0.0; params.len()]);
+    };
+    let Value::Table(stds) = raw else {
+        return Err(ParamProblem::WrongType {
+            field: UNCERTAINTY.into(),
+            expected: "a table of standard deviations, [uncertainty]".into(),
+            value: describe(raw),
+        });
+    };
+    if let Some(key) = stds.keys().find(|k| !params.iter().any(|p| &p.key == *k)) {
+        return Err(ParamProblem::UnknownKey(format!("{UNCERTAINTY}.{key}")));
+    }
+    params
+        .iter()
+        .map(|p| {
+            if !stds.contains_key(&p.key) {
+                return Ok(0.0);
+            }
+            let std = value_of(stds, p, params).map_err(|e| match e {
+                ParamProblem::WrongType {
+                    field,
+                    expected,
+                    value,
+                } => ParamProblem::WrongType {
+                    field: format!("{UNCERTAINTY}.{field}"),
+                    expected,
+                    value,
+                },
+                other => other,
+            })?;
+            if !(std.is_finite() && std >= 0.0) {
+                return Err(ParamProblem::WrongType {
+                    field: format!("{UNCERTAINTY}.{}", p.name),
+                    expected: "a standard deviation, finite and ≥ 0".into(),
+                    value: format!("{std}"),
+                });
+            }
+            Ok(std)
+        })
+        .collect()
 }
 
 fn value_of(table: &Table, p: &Param, params: &[Param]) -> Result<f64, ParamProblem> {
@@ -157,5 +228,54 @@ fn describe(v: &Value) -> String {
         Value::Boolean(b) => b.to_string(),
         Value::Array(items) => format!("an array of {} items", items.len()),
         other => other.type_str().to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::validate::parse_ir;
+
+    const WHIPPLE: &str = include_str!("../../../generated/ir/whipple.json");
+    const BROWSER: &str = include_str!("../../../vehicles/bicycles/browser.toml");
+
+    /// A measured bicycle's file: its values read as ever, its standard deviations in IR order.
+    #[test]
+    fn the_uncertainty_table_is_read_and_is_not_a_value() {
+        let ir = parse_ir(WHIPPLE, "whipple.json").unwrap();
+        let values = parse_params(BROWSER, "browser.toml", ir.params()).unwrap();
+        let stds = parse_uncertainty(BROWSER, "browser.toml", ir.params()).unwrap();
+        let at = |name: &str| ir.params().iter().position(|p| p.name == name).unwrap();
+        assert_eq!(values[at("w")], 1.121);
+        assert_eq!(stds[at("w")], 0.002);
+        assert_eq!(stds[at("lambda")], 0.00349065850399);
+        // A file without the table: every value exact.
+        let plain = BROWSER.split("\n[uncertainty]\n").next().unwrap();
+        let zero = parse_uncertainty(plain, "plain.toml", ir.params()).unwrap();
+        assert!(zero.iter().all(|s| *s == 0.0));
+    }
+
+    /// Every mistake in the table is named: an unknown key, a negative or non-finite standard
+    /// deviation, a value that is not a number, a table that is not one.
+    #[test]
+    fn a_bad_uncertainty_table_is_named() {
+        let ir = parse_ir(WHIPPLE, "whipple.json").unwrap();
+        let plain = BROWSER.split("\n[uncertainty]\n").next().unwrap();
+        for (table, names) in [
+            ("[uncertainty]\nwheel = 0.1\n", "uncertainty.wheel"),
+            ("[uncertainty]\nw = -0.1\n", "uncertainty.w"),
+            ("[uncertainty]\nw = nan\n", "uncertainty.w"),
+            ("[uncertainty]\nw = \"small\"\n", "uncertainty.w"),
+            ("uncertainty = 0.1\n", "uncertainty"),
+        ] {
+            // A plain key goes before the file's values, a table after them.
+            let text = if table.starts_with('[') {
+                format!("{plain}{table}")
+            } else {
+                format!("{table}{plain}")
+            };
+            let err = parse_params(&text, "bike.toml", ir.params()).unwrap_err();
+            assert!(err.to_string().contains(names), "{table}: {err}");
+        }
     }
 }

@@ -49,7 +49,12 @@ fn table(job: &dyn AnyJob) -> String {
         md += &format!(
             "| {flag} | {} | {default} | {}.{choices} |\n",
             o.unit,
-            o.help.replace('|', "\\|")
+            // A table cell is Markdown with inline HTML: `|` ends the cell, `<model>` would be a
+            // tag.
+            o.help
+                .replace('|', "\\|")
+                .replace('<', "&lt;")
+                .replace('>', "&gt;")
         );
     }
     md

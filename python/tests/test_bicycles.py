@@ -1,0 +1,78 @@
+"""The measured bicycles (vehicles/bicycles/, converted from the `bicycleparameters` data set by
+`python -m twv_modeling bicycles`): the files are what the conversion writes today; each
+file's canonical matrices M, C1, K0, K2 (the closed-form Appendix A of Meijaard et al. 2007 on
+the file's values) equal the package's own `Bicycle.canonical()`; and twv's weave and capsize
+speeds (its derived nonlinear model, linearised) equal those of the package's own eigenvalue
+routine `Bicycle.eig`, found on its eigenvalues by bisection."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import warnings
+
+import bicycleparameters
+import numpy as np
+import pytest
+from conftest import REPO
+from scipy.optimize import brentq
+from twv_modeling import bicycles
+from twv_modeling.whipple_benchmark import benchmark_matrices, read_parameters
+
+import twv
+
+FOLDER = REPO / "vehicles" / "bicycles"
+NAMES = bicycles.available()
+
+
+def package_bicycle(name: str):
+    with contextlib.redirect_stdout(io.StringIO()), warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return bicycleparameters.Bicycle(name, pathToData=str(bicycles.data_dir()))
+
+
+def test_the_files_are_what_the_conversion_writes():
+    assert len(NAMES) >= 9 and "Browser" in NAMES and "Benchmark" in NAMES
+    assert bicycles.stale(FOLDER) == []
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_each_file_has_the_packages_canonical_matrices(name):
+    theirs = package_bicycle(name).canonical(nominal=True)
+    ours = benchmark_matrices(read_parameters(FOLDER / f"{name.lower()}.toml"))
+    for label, a, b in zip(
+        ("M", "C1", "K0", "K2"), (ours.M, ours.C1, ours.K0, ours.K2), theirs, strict=True
+    ):
+        assert np.allclose(a, np.asarray(b, dtype=float), rtol=1e-12, atol=1e-12), (name, label)
+
+
+def package_abscissa(bike, v: float) -> tuple[float, bool]:
+    """The largest real part of the package's eigenvalues at v, and whether that eigenvalue is
+    part of a complex pair."""
+    ev = np.asarray(bike.eig(np.array([v]))[0]).ravel()
+    top = ev[np.argmax(ev.real)]
+    return float(top.real), bool(abs(top.imag) > 1e-9)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_weave_and_capsize_speeds_are_the_packages(name):
+    bike = package_bicycle(name)
+    steady = twv.steady(
+        twv.Model("whipple", params=FOLDER / f"{name.lower()}.toml"), speed=(0, 10, 0.01)
+    )
+    ranges = steady.raw["ranges"]
+    # The package's sign changes of the largest real part on the same grid, refined by bisection.
+    grid = np.arange(0, 10.0 + 1e-9, 0.01)
+    signs = [package_abscissa(bike, v)[0] < 0 for v in grid]
+    crossings = [
+        brentq(lambda v: package_abscissa(bike, v)[0], grid[i], grid[i + 1], xtol=1e-12)
+        for i in range(len(grid) - 1)
+        if signs[i] != signs[i + 1]
+    ]
+    ours = [b for r in ranges for b in (r["lo"], r["hi"]) if b not in (0.0, 10.0)]
+    assert len(ours) == len(crossings), (name, ours, crossings)
+    for a, b in zip(ours, crossings, strict=True):
+        assert abs(a - b) < 1e-6, (name, a, b)
+    if steady.weave_speed is not None:
+        assert abs(steady.weave_speed - crossings[0]) < 1e-6
+        assert package_abscissa(bike, steady.weave_speed - 1e-3)[1], "a complex pair crosses"
