@@ -58,6 +58,14 @@ step "IR freshness (generated/ir is what the modeling code derives today)"
 # vehicles/bicycles is what the pinned bicycleparameters' data set converts to today.
 "$py" -m twv_modeling bicycles --check
 
+# The two workspaces outside the main one (fuzz/, firmware/qemu/) keep lock files of their own,
+# which go stale when a crate they use gains a dependency: checked here, in a second, rather than
+# by the background fuzz step twenty minutes in.
+step "lock files of fuzz/ and firmware/qemu/ are current (cargo metadata --locked)"
+for manifest in Cargo.toml fuzz/Cargo.toml firmware/qemu/Cargo.toml; do
+    cargo metadata --locked --format-version 1 --manifest-path "$manifest" >/dev/null
+done
+
 step "cargo fmt --check"
 cargo fmt --all --check
 cargo fmt --manifest-path fuzz/Cargo.toml --check
