@@ -97,7 +97,8 @@ fn quick_report_is_complete_and_consistent() {
         "4. Recovery",
         "5. Linear",
         "6. Stability map",
-        "7. The study",
+        "7. Balancing the bicycle",
+        "8. The study",
     ] {
         assert!(html.contains(section), "{section}");
     }

@@ -3,7 +3,7 @@
 
 use plotters::prelude::*;
 
-use super::{font, Area, DrawResult, LABEL_PX, TICK_PX, TITLE_PX};
+use super::{font, tick, Area, DrawResult, LABEL_PX, TICK_PX, TITLE_PX};
 
 /// A heat map's data and labels. `values` and `boundary` are row-major over (`ys`, `xs`):
 /// entry `j·xs.len() + i` belongs to (xs[i], ys[j]). A cell without a value (NaN) is drawn in
@@ -209,6 +209,8 @@ impl HeatMap {
             .build_cartesian_2d(x0..x1, y0..y1)?;
         ctx.configure_mesh()
             .disable_mesh()
+            .x_label_formatter(&tick)
+            .y_label_formatter(&tick)
             .x_desc(&h.x_label)
             .y_desc(&h.y_label)
             .label_style(font(TICK_PX, k))
@@ -246,6 +248,7 @@ impl HeatMap {
         cb.configure_mesh()
             .disable_mesh()
             .disable_x_axis()
+            .y_label_formatter(&tick)
             .y_desc(&h.value_label)
             .label_style(font(TICK_PX, k))
             .axis_desc_style(font(TICK_PX, k))

@@ -5,7 +5,7 @@ use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-use super::{bounds, font, Area, DrawResult, COLORS, LABEL_PX, TICK_PX, TITLE_PX};
+use super::{bounds, font, tick, Area, DrawResult, COLORS, LABEL_PX, TICK_PX, TITLE_PX};
 
 /// One named curve.
 #[derive(Debug, Clone, PartialEq)]
@@ -33,7 +33,7 @@ pub struct LineChart {
     pub curves: Vec<Curve>,
 }
 
-/// Width of the legend column [px at 1×].
+/// Least width of the legend column [px at 1×]; wider when a name needs it.
 const LEGEND_W: u32 = 150;
 
 impl LineChart {
@@ -78,8 +78,20 @@ impl LineChart {
             .collect();
         let legend = self.curves.len() > 1;
         let width = root.dim_in_pixel().0;
+        // The line sample (6 + 24 + 6 px), the longest name as the font renders it, a margin.
+        let longest = self
+            .curves
+            .iter()
+            .filter_map(|c| {
+                root.estimate_text_size(&c.name, &font(LABEL_PX, k).into_text_style(&root))
+                    .ok()
+            })
+            .map(|(w, _)| w)
+            .max()
+            .unwrap_or(0);
+        let legend_w = (LEGEND_W * k).max(longest + 44 * k).min(width / 3);
         let (plot, side) = if legend {
-            root.split_horizontally(width.saturating_sub(LEGEND_W * k))
+            root.split_horizontally(width.saturating_sub(legend_w))
         } else {
             root.split_horizontally(width)
         };
@@ -136,7 +148,12 @@ impl LineChart {
         DB: DrawingBackend,
         X: Ranged<ValueType = f64> + ValueFormatter<f64>,
     {
-        ctx.configure_mesh()
+        let mut mesh = ctx.configure_mesh();
+        if !self.log_x {
+            // A logarithmic axis keeps its own labels (decades).
+            mesh.x_label_formatter(&tick);
+        }
+        mesh.y_label_formatter(&tick)
             .x_desc(&self.x_label)
             .y_desc(&self.y_label)
             .label_style(font(TICK_PX, k))

@@ -5,8 +5,8 @@
 use serde::Serialize;
 
 use crate::api::{
-    complex, LinearReport, LoopVerdict, Recovery, SimResult, SpectrumResult, TuneReport,
-    TuneVerdict,
+    complex, LinearReport, LoopVerdict, Recovery, RideVerdict, SimResult, SpectrumResult,
+    SteerVerdict, TuneReport, TuneVerdict,
 };
 use crate::audit::AuditReport;
 use crate::lyapunov::{Classification, ExponentSign};
@@ -482,4 +482,44 @@ pub fn equations_claim(audit: &Check) -> Claim {
         },
         evidence: audit.detail.clone(),
     }
+}
+
+/// The bicycle: where it is self-stable, whether the tuned schedule balances it at every speed,
+/// and what a push below the weave speed does unsteered and steered.
+pub fn bicycle_finding(b: &super::sections::BicycleSection) -> Finding {
+    use super::sections::{PUSH, PUSH_SPEED};
+    let n = b.steer.points.len();
+    let met = b.steer.points.iter().filter(|p| p.met).count();
+    let (lo, hi) = (
+        b.steer.points.first().map_or(f64::NAN, |p| p.speed),
+        b.steer.points.last().map_or(f64::NAN, |p| p.speed),
+    );
+    let stable = match (b.steady.weave_speed, b.steady.capsize_speed) {
+        (Some(w), Some(c)) => format!("is self-stable from {w:.2} to {c:.2} m/s"),
+        _ => "is self-stable nowhere between weave and capsize".to_string(),
+    };
+    let fell = matches!(b.unsteered.verdict, RideVerdict::Fell);
+    let recovered = matches!(b.steered.verdict, RideVerdict::Recovered);
+    let text = format!(
+        "Nobody steering, the bicycle {stable}. Steered by a gain schedule tuned to {}, it \
+         meets the spec, and a {PUSH} rad/s lean-rate push dies out, at {met} of {n} speeds \
+         from {lo} to {hi} m/s. At {PUSH_SPEED} m/s the push {} nobody steering and {} steered.",
+        b.steer.spec,
+        if fell {
+            "makes it fall"
+        } else {
+            "does not make it fall"
+        },
+        if recovered {
+            "dies out"
+        } else {
+            "does not die out"
+        },
+    );
+    let verdict = if matches!(b.steer.verdict, SteerVerdict::Met) && fell && recovered {
+        "balanced by steering at every speed"
+    } else {
+        "not balanced at every speed"
+    };
+    finding("the bicycle", verdict, text)
 }

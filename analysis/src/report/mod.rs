@@ -17,11 +17,12 @@ use std::time::Instant;
 use serde::Serialize;
 
 pub use findings::{
-    audit_check, equations_claim, hyperchaos_claim, linear_finding, map_finding, open_loop_finding,
-    pd_exponents_claim, recovery_claim, recovery_finding, trace_check, tune_finding, Check, Claim,
-    Finding, DRIFT_TOLERANCE, TRACE_TOLERANCE,
+    audit_check, bicycle_finding, equations_claim, hyperchaos_claim, linear_finding, map_finding,
+    open_loop_finding, pd_exponents_claim, recovery_claim, recovery_finding, trace_check,
+    tune_finding, Check, Claim, Finding, DRIFT_TOLERANCE, TRACE_TOLERANCE,
 };
 pub use html::{svg_size, Figure, Page, PAGE_PADDING, PAGE_WIDTH};
+pub use sections::{BicycleSection, PUSH, PUSH_SPEED};
 
 use crate::api::{LinearReport, PhaseResult, Progress, SimResult, SpectrumResult, TuneReport};
 use crate::audit::{AuditReport, AuditSettings};
@@ -105,6 +106,8 @@ pub struct ReportResults {
     pub map: Vec<PointResult>,
     /// The closed-loop spectrum under the study's PD.
     pub closed_loop_lyapunov: SpectrumResult,
+    /// The Whipple bicycle, unsteered and steered.
+    pub bicycle: sections::BicycleSection,
     /// Wall time of the build [s].
     pub wall_time_s: f64,
     /// The CPU and kernel build that wall time was measured on ([`crate::machine::describe`]).

@@ -4,25 +4,102 @@
 use serde::Serialize;
 
 use super::findings::{
-    audit_check, equations_claim, hyperchaos_claim, linear_finding, map_finding, open_loop_finding,
-    pd_exponents_claim, recovery_claim, recovery_finding, trace_check, tune_finding, Check,
-    Finding,
+    audit_check, bicycle_finding, equations_claim, hyperchaos_claim, linear_finding, map_finding,
+    open_loop_finding, pd_exponents_claim, recovery_claim, recovery_finding, trace_check,
+    tune_finding, Check, Finding,
 };
 use super::html::{Figure, Page};
 use super::{HorizonRow, ReportResults, ReportSettings};
 use crate::api::{
-    analyse, audit_model, portraits, simulate, spectrum, sweep, tune_model_with, LinearSettings,
-    PhaseSettings, Progress, SimSettings, SpectrumSettings, SweepSettings, TuneSettings, AUDITED,
+    analyse, audit_model, portraits, ride, simulate, spectrum, steady_motion, steer, sweep,
+    tune_model_with, LinearSettings, PhaseSettings, Progress, RideResult, RideSettings,
+    RideVerdict, SimSettings, SpectrumSettings, SteadyResult, SteadySettings, SteerLoopSettings,
+    SteerResult, SweepSettings, TuneSettings, AUDITED,
 };
 use crate::audit::AuditSettings;
+use crate::control::steer::SteerSettings;
 use crate::control::{ControllerSettings, RunSettings, STUDY_PD};
 use crate::error::{Error, Result};
 use crate::lyapunov::{InitialBasis, LyapunovSettings};
 use crate::model::{ModelSource, ModelSpec, ResolvedModel};
+use crate::plot::{Curve, LineChart};
 use crate::sweep::{Grid, Metric, PointResult};
 
 /// Sections computed (the progress steps).
-pub const STEPS: usize = 7;
+pub const STEPS: usize = 8;
+
+/// The bicycle section's push: a lean rate [rad/s] added to straight running at
+/// [`PUSH_SPEED`], below the weave speed, where a bicycle nobody steers falls.
+pub const PUSH: f64 = 0.5;
+/// The speed of the bicycle section's push [m/s].
+pub const PUSH_SPEED: f64 = 3.0;
+
+/// The Whipple benchmark bicycle: self-stable nowhere but between its weave and capsize speeds,
+/// balanced by a tuned steer-gain schedule everywhere, and one push below the weave speed,
+/// unsteered and steered.
+#[derive(Debug, Clone, Serialize)]
+pub struct BicycleSection {
+    /// Its eigenvalues against speed, nobody steering.
+    pub steady: SteadyResult,
+    /// The tuned steer schedule, certified and checked on the nonlinear model.
+    pub steer: SteerResult,
+    /// The push at [`PUSH_SPEED`] nobody steers.
+    pub unsteered: RideResult,
+    /// The same push, steered by the schedule's gains at that speed.
+    pub steered: RideResult,
+}
+
+fn bicycle(quick: bool, progress: &dyn Progress) -> Result<BicycleSection> {
+    let bike = ModelSpec::shipped("whipple").resolve()?;
+    let steady = steady_motion(
+        &bike,
+        &SteadySettings {
+            step: if quick { 0.1 } else { 0.01 },
+            ..SteadySettings::default()
+        },
+        progress,
+    )?;
+    let schedule = steer(
+        &bike,
+        &SteerLoopSettings {
+            step: if quick { 1.0 } else { 0.5 },
+            ..SteerLoopSettings::default()
+        },
+        progress,
+    )?;
+    let gains = schedule
+        .points
+        .iter()
+        .find(|p| p.speed == PUSH_SPEED)
+        .and_then(|p| p.gains());
+    let push = |steer: Option<SteerSettings>| {
+        ride(
+            &bike,
+            &RideSettings {
+                speed: Some(PUSH_SPEED),
+                perturb: [("w_phi".to_string(), PUSH)].into(),
+                steer,
+                run: RunSettings {
+                    t_end: 5.0,
+                    ..RunSettings::default()
+                },
+                ..RideSettings::default()
+            },
+            progress,
+        )
+    };
+    let unsteered = push(None)?;
+    let steered = push(Some(SteerSettings {
+        gains: gains.unwrap_or_default(),
+        saturation: None,
+    }))?;
+    Ok(BicycleSection {
+        steady,
+        steer: schedule,
+        unsteered,
+        steered,
+    })
+}
 
 /// The study's initial tilt [rad].
 const TILT: f64 = 0.1;
@@ -235,6 +312,9 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
     )?;
     step()?;
 
+    let bicycle = bicycle(quick, quiet)?;
+    step()?;
+
     let audit_ok = audit_check(&audit);
     let checks: Vec<Check> = vec![audit_ok.clone(), trace_check(&preset)];
     let horizons: Vec<(f64, Vec<f64>)> = lyapunov_horizons
@@ -248,6 +328,7 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
         linear_finding(&linear),
         tune_finding(&tune),
         map_finding(&map, predicted_boundary(&v8)),
+        bicycle_finding(&bicycle),
     ]
     .into();
     let longest = lyapunov_horizons
@@ -274,6 +355,7 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
         tune,
         map,
         closed_loop_lyapunov: closed,
+        bicycle,
         wall_time_s: 0.0,
         machine: String::new(),
     })
@@ -616,8 +698,76 @@ pub fn page(
         );
     }
 
-    // 7. Claims.
-    page.heading(2, "7. The study's claims, checked");
+    // 7. The bicycle.
+    let b = &r.bicycle;
+    page.heading(2, "7. Balancing the bicycle");
+    page.paragraph(&format!(
+        "The same machinery on a second two-wheeler: the Whipple bicycle of the benchmark of \
+         Meijaard et al. (2007), derived by twv from bodies and rolling contacts. Nobody \
+         steering, it stays up only between its weave and capsize speeds; below the weave speed \
+         a rider must steer into the fall. `twv steer` tunes a steer-torque law on lean, steer \
+         and their rates at every speed (Clarabel, closest to an LQR design that meets the \
+         margin spec), certifies each speed's gains and checks them on the nonlinear bicycle. \
+         {}",
+        r.findings[6].text
+    ));
+    add(
+        &mut page,
+        figure(
+            progress,
+            "bicycle_eigenvalues.svg",
+            b.steady.figure(),
+            "The bicycle's eigenvalues against speed, nobody steering (the benchmark's Fig. 3): \
+             self-stable where every real part is negative.",
+        )?,
+    );
+    for (file, fig) in b.steer.figures() {
+        let caption = match file.as_str() {
+            "gains.svg" => "The tuned steer-gain schedule against speed.",
+            "abscissa.svg" => {
+                "The largest real part of the eigenvalues, nobody steering and steered by the \
+                 schedule."
+            }
+            _ => "The disk phase margin at the steer-torque input of the steered bicycle.",
+        };
+        add(
+            &mut page,
+            figure(progress, &format!("bicycle_{file}"), fig, caption)?,
+        );
+    }
+    let lean = |r: &RideResult, name: &str| {
+        let phi = r.columns.iter().position(|c| c == "phi").unwrap_or(1);
+        Curve {
+            name: name.to_string(),
+            points: r.rows.iter().map(|row| (row[0], row[phi])).collect(),
+        }
+    };
+    add(
+        &mut page,
+        figure(
+            progress,
+            "bicycle_push.svg",
+            crate::plot::Figure::Line(LineChart::new(
+                &format!("Whipple bicycle at {PUSH_SPEED} m/s after a {PUSH} rad/s lean-rate push"),
+                "t [s]",
+                "lean φ [rad]",
+                (800, 450),
+                vec![
+                    lean(&b.unsteered, "nobody steering"),
+                    lean(&b.steered, "steered"),
+                ],
+            )),
+            &format!(
+                "The lean after the push at {PUSH_SPEED} m/s: {} nobody steering, {} steered by \
+                 the schedule's gains.",
+                ride_outcome(&b.unsteered),
+                ride_outcome(&b.steered)
+            ),
+        )?,
+    );
+
+    // 8. Claims.
+    page.heading(2, "8. The study's claims, checked");
     let rows: Vec<Vec<String>> = r
         .claims
         .iter()
@@ -631,6 +781,16 @@ pub fn page(
         r.machine
     ));
     Ok((page.finish("twv report"), figures))
+}
+
+/// How a push ride ended, in words, from its verdict.
+fn ride_outcome(ride: &RideResult) -> &'static str {
+    match ride.verdict {
+        RideVerdict::Fell => "it falls",
+        RideVerdict::Recovered => "the lean dies out",
+        RideVerdict::NotRecovered => "the lean neither falls nor dies out within the run",
+        RideVerdict::Undisturbed => "nothing moved",
+    }
 }
 
 /// The in-memory map of the report's sweep, for its figure and CSV.
@@ -657,6 +817,11 @@ pub fn data_files(r: &ReportResults) -> Vec<(String, String)> {
         ("data/phase.json".to_string(), pretty(&r.phase)),
         ("data/map.csv".to_string(), map_of(&r.map, n).csv()),
     ];
+    out.push((
+        "data/bicycle_steady.csv".to_string(),
+        r.bicycle.steady.csv(),
+    ));
+    out.push(("data/bicycle_steer.csv".to_string(), r.bicycle.steer.csv()));
     for sim in &r.recovery {
         out.push((
             format!("data/{}.csv", sim.scenario.replace(' ', "_")),

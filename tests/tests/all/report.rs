@@ -151,3 +151,43 @@ fn every_figure_text_is_at_least_10_px_where_the_report_shows_it() {
         .iter()
         .any(|(_, px)| *px < 10.0));
 }
+
+/// The bicycle section: the schedule balances the benchmark bicycle at every speed of the quick
+/// report, the push below the weave speed fells it unsteered and dies out steered; the finding
+/// says so, and says otherwise when the steered run is replaced by one that falls.
+#[test]
+fn the_bicycle_finding_follows_its_runs() {
+    use twv_analysis::api::RideVerdict;
+    use twv_analysis::report::bicycle_finding;
+    let report = build(
+        &ReportSettings {
+            quick: true,
+            ..ReportSettings::default()
+        },
+        &Silent,
+    )
+    .unwrap();
+    let b = &report.results.bicycle;
+    assert_eq!(b.unsteered.verdict, RideVerdict::Fell);
+    assert_eq!(b.steered.verdict, RideVerdict::Recovered);
+    assert!(b.steer.points.iter().all(|p| p.met));
+    let finding = bicycle_finding(b);
+    assert_eq!(finding.verdict, "balanced by steering at every speed");
+    assert!(
+        finding.text.contains("4.29 to 6.02 m/s"),
+        "{}",
+        finding.text
+    );
+    // The page escapes the spec's `>=`.
+    let escaped = finding.text.replace('&', "&amp;").replace('>', "&gt;");
+    assert!(report.html.contains(&escaped), "{escaped}");
+    let mut worse = b.clone();
+    worse.steered = worse.unsteered.clone();
+    let flipped = bicycle_finding(&worse);
+    assert_eq!(flipped.verdict, "not balanced at every speed");
+    assert!(
+        flipped.text.contains("does not die out"),
+        "{}",
+        flipped.text
+    );
+}
