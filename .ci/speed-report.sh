@@ -2,7 +2,8 @@
 # Every speed table of the README, measured on this machine, in one file: the kernels against
 # both C peers for each build this CPU runs (and the study preset's spectrum against its
 # dependent-chain floor), the JIT against compiled and interpreted code, and the 100 × 100
-# max-Lyapunov map for each lanes build. Each benchmark names the CPU and the builds it ran and
+# max-Lyapunov map for each lanes build, and the bicycle's steer map against python-control.
+# Each benchmark names the CPU and the builds it ran and
 # those it could not. What to run on a CPU the README has no figures for (an AVX2-only Zen 3,
 # an aarch64 server):
 #
@@ -47,6 +48,16 @@ bench "the JIT against compiled and interpreted code" \
     TWV_BENCH_SAMPLES=31 cargo bench -q -p twv-bench --bench jit
 bench "the 100 × 100 max-Lyapunov map, each lanes build" \
     TWV_MAP_ROUNDS=2 cargo bench -q -p twv-analysis --bench map
+# The bicycle's steer map from Python and the CLI against python-control and NumPy: the
+# optimised extension into .venv first (it reuses the release build).
+if cargo build -q --release -p twv-cli &&
+    PATH="$PWD/.venv/bin:$PATH" VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release \
+        --uv --quiet -m python/Cargo.toml; then
+    bench "the bicycle's 100 × 100 steer map against python-control and NumPy" \
+        PYTHONPATH=modeling .venv/bin/python python/benches/steer_map_peers.py
+else
+    failed+=("the build of twv and its Python package for the steer-map benchmark")
+fi
 
 mv "$part" "$out"
 echo

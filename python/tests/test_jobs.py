@@ -252,7 +252,8 @@ def test_every_job_is_a_function_of_the_same_name_as_the_cli_subcommand():
     ).stdout
     for job in jobs:
         assert callable(getattr(twv, job["name"])), job["name"]
-        assert f"  {job['name']} " in help_text, job["name"]
+        # On the command line a `_` of a name is a `-` (`steer-map`).
+        assert f"  {job['name'].replace('_', '-')} " in help_text, job["name"]
         for alias in job["aliases"]:
             if alias == "margins":
                 continue  # twv.margins is the shortcut to linearize's margins

@@ -56,3 +56,21 @@ def test_a_ride_steered_by_the_schedules_gains_recovers():
     assert ride.raw["verdict"] == "recovered", ride.summary
     unsteered = twv.ride(twv.Model("whipple"), speed=3, perturb="w_phi=0.5")
     assert unsteered.raw["verdict"] == "fell", unsteered.summary
+
+
+def test_a_steer_map_is_the_benchmark_closed_loop_at_every_cell():
+    r = twv.steer_map(
+        twv.Model("whipple"),
+        speed="1:7:4",
+        gain="k_phi_dot",
+        values="-10:30:5",
+        gains={"k_phi": 10.0},
+    )
+    assert r.abscissa.shape == (5, 4)
+    for j, x in enumerate(r.values):
+        for i, v in enumerate(r.speeds):
+            k = np.array([10.0, 0.0, x, 0.0])
+            theirs = benchmark_closed_loop(v, k).real.max()
+            assert abs(r.abscissa[j, i] - theirs) <= 1e-10 * max(1.0, abs(theirs)), (v, x)
+    assert (r.stable == (r.abscissa < 0)).all()
+    assert r.weave_speed == pytest.approx(4.2924, abs=1e-4)

@@ -360,6 +360,39 @@ def _axis_values(axis: dict[str, Any]) -> np.ndarray:
     return np.array([hi if i == n - 1 else lo + (hi - lo) * (i / (n - 1)) for i in range(n)])
 
 
+class SteerMapResult(Result):
+    """The steered loop's stability over speed × one steer gain (`twv.steer_map`): `speeds`
+    [m/s], `values` of the gain, `abscissa` [value, speed] (the closed loop's largest eigenvalue
+    real part [1/s], NaN where not finite), `stable` and the band nobody steering."""
+
+    @property
+    def speeds(self) -> np.ndarray:
+        return np.array(self.raw["speeds"], dtype=float)
+
+    @property
+    def values(self) -> np.ndarray:
+        return np.array(self.raw["values"], dtype=float)
+
+    @property
+    def abscissa(self) -> np.ndarray:
+        """[value, speed]: max Re of the closed loop's eigenvalues [1/s]."""
+        flat = [np.nan if a is None else a for a in self.raw["abscissa"]]
+        return np.array(flat, dtype=float).reshape(len(self.raw["values"]), len(self.raw["speeds"]))
+
+    @property
+    def stable(self) -> np.ndarray:
+        """[value, speed]: every closed-loop eigenvalue has Re < 0."""
+        return self.abscissa < 0
+
+    @property
+    def weave_speed(self) -> float | None:
+        return self.raw["weave_speed"]
+
+    @property
+    def capsize_speed(self) -> float | None:
+        return self.raw["capsize_speed"]
+
+
 class SweepResult(Result):
     """A map over a (Kp, Kd[, Ki]) grid and model parameters: `value[..., p2, p1, ki, kd, kp]`
     (the parameter axes in reverse order in front; NaN unless `status` is ok) and `status` of
@@ -421,6 +454,7 @@ RESULTS: dict[str, type[Result]] = {
     "linearize": LinearResult,
     "steady": SteadyResult,
     "steer": SteerResult,
+    "steer_map": SteerMapResult,
     "tune": TuneResult,
     "exponent": ExponentResult,
 }

@@ -77,9 +77,14 @@ fn arg(o: &OptionInfo) -> Arg {
 
 /// The subcommand of `job`, with the model's flags and `extra` ones of the front end.
 pub fn command(job: &dyn AnyJob, files: &'static str) -> Command {
-    let mut cmd = Command::new(job.name())
+    // A `_` of a name is a `-` on the command line (`steer-map`); the name as the registry
+    // spells it still answers.
+    let kebab = job.name().replace('_', "-");
+    let spelled = (kebab != job.name()).then(|| job.name().to_string());
+    let mut cmd = Command::new(kebab)
         .about(job.summary())
         .visible_aliases(cli_aliases(job))
+        .aliases(spelled)
         .aliases(
             job.aliases()
                 .iter()

@@ -30,6 +30,7 @@ mod simulate;
 mod spectrum;
 mod steady;
 mod steer;
+mod steer_map;
 mod sweep;
 mod tune;
 
@@ -58,6 +59,9 @@ pub use steady::{
 };
 pub use steer::{
     steer, steer_loop, SteerLoopSettings, SteerPoint, SteerResult, SteerVerdict, SteeredRide,
+};
+pub use steer_map::{
+    steer_map, StabilisingRange, SteerMapResult, SteerMapSettings, SteerMapVerdict,
 };
 pub use sweep::{
     compute_points, run_shard, status_counts, sweep, Computed, ShardOptions, ShardOutcome,

@@ -35,6 +35,7 @@ mod ride;
 mod simulate;
 mod steady;
 mod steer;
+mod steer_map;
 mod sweep;
 mod tune;
 
@@ -58,6 +59,7 @@ pub use ride::Ride;
 pub use simulate::Simulate;
 pub use steady::Steady;
 pub use steer::Steer;
+pub use steer_map::SteerMap;
 pub use sweep::{Sweep, SweepPoints};
 pub use tune::Tune;
 
@@ -331,7 +333,7 @@ macro_rules! registry {
 
 registry![
     Evaluate, Codegen, Audit, Lyapunov, Simulate, Disturb, Ride, Phase, Linearize, Steady, Steer,
-    Tune, Sweep, Exponent, Export,
+    SteerMap, Tune, Sweep, Exponent, Export,
 ];
 
 /// Every job.

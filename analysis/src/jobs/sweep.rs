@@ -27,7 +27,7 @@ pub struct SweepPoints(pub Vec<PointResult>);
 const METRICS: &[&str] = &["max-lyapunov", "spectral-abscissa", "settling-time"];
 
 /// An axis from `A:B:N` or `[lo, hi, n]`.
-fn axis(name: &'static str, v: &Value) -> Result<Axis> {
+pub(super) fn axis(name: &'static str, v: &Value) -> Result<Axis> {
     match v {
         Value::String(text) => Ok(Axis::parse(name, text)?),
         Value::Array(_) => {
@@ -54,7 +54,7 @@ fn axis(name: &'static str, v: &Value) -> Result<Axis> {
     }
 }
 
-fn axis_text(a: &Axis) -> Value {
+pub(super) fn axis_text(a: &Axis) -> Value {
     json!(format!("{}:{}:{}", a.lo, a.hi, a.n))
 }
 

@@ -13,7 +13,7 @@
 //! return ratio broken at the steer-torque input is L(s) = −K (sI − A)⁻¹ b and the closed-loop
 //! matrix is A + b K.
 
-use nalgebra::{Complex, DMatrix, DVector};
+use nalgebra::{Complex, DMatrix, DVector, Matrix4, Schur};
 use serde::{Deserialize, Serialize};
 
 use super::error::{check_finite, LinearError};
@@ -181,6 +181,23 @@ impl SteerLoop {
             spectral_abscissa,
             eigenvalues,
         })
+    }
+
+    /// The closed loop's spectral abscissa (largest real part of the eigenvalues of A + b K),
+    /// on the stack: what a map asks of each of its cells, without the eigenvalues' vector
+    /// (`None` when the Schur iteration does not converge or the result is not finite).
+    pub fn closed_loop_abscissa(&self, g: &SteerGains) -> Option<f64> {
+        let k = g.row();
+        let m = Matrix4::from_fn(|i, j| self.a[(i, j)] + self.b[i] * k[j]);
+        if m.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let schur = Schur::try_new(m, f64::EPSILON, 10_000)?;
+        let abscissa = schur
+            .complex_eigenvalues()
+            .iter()
+            .fold(f64::NEG_INFINITY, |a, e| a.max(e.re));
+        abscissa.is_finite().then_some(abscissa)
     }
 
     /// ∂L(jω)/∂k_j for each gain: −e_jᵀ (jωI − A)⁻¹ b (`None` at a pole on the axis). L is

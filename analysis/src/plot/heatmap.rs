@@ -1,7 +1,9 @@
 //! Heat maps of a scalar over a rectangular grid (a stability map over two gains), with a
 //! colour bar and a boundary drawn as the zero contour of a second field (marching squares).
 
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{font, tick, Area, DrawResult, LABEL_PX, TICK_PX, TITLE_PX};
 
@@ -24,7 +26,16 @@ pub struct HeatMap {
     /// A signed quantity whose sign means stable (< 0) or unstable (> 0): drawn on a diverging
     /// scale centred on 0 (blue stable, red unstable); otherwise a sequential scale.
     pub signed: bool,
+    /// Vertical lines at these x values, labelled (a bicycle's weave and capsize speeds).
+    pub marks: Vec<Mark>,
     pub size: (u32, u32),
+}
+
+/// A labelled vertical line across a heat map.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mark {
+    pub x: f64,
+    pub label: String,
 }
 
 /// A line segment in data coordinates.
@@ -235,6 +246,22 @@ impl HeatMap {
             .into_iter()
             .map(|[p, q]| PathElement::new(vec![p, q], BLACK.stroke_width(3 * k)));
         ctx.draw_series(lines)?;
+        for m in h.marks.iter().filter(|m| m.x >= x0 && m.x <= x1) {
+            ctx.draw_series(std::iter::once(DashedPathElement::new(
+                vec![(m.x, y0), (m.x, y1)],
+                8 * k,
+                6 * k,
+                RGBColor(40, 40, 40).stroke_width(2 * k),
+            )))?;
+            ctx.draw_series(std::iter::once(Text::new(
+                m.label.clone(),
+                (m.x, y1),
+                font(TICK_PX, k)
+                    .into_font()
+                    .color(&RGBColor(20, 20, 20))
+                    .pos(Pos::new(HPos::Left, VPos::Top)),
+            )))?;
+        }
 
         // The colour bar above the legend of the cells without a value.
         let legend_h = (LABEL_PX + 10) * k * (labels.len() as u32 + 1);

@@ -12,7 +12,7 @@ mod line;
 mod render;
 
 pub use grid::Grid;
-pub use heatmap::{zero_contour, HeatMap, Segment};
+pub use heatmap::{zero_contour, HeatMap, Mark, Segment};
 pub use line::{Curve, LineChart};
 
 use plotters::coord::Shift;

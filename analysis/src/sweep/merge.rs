@@ -176,6 +176,7 @@ impl Map {
                 .map(|p| p.stability_indicator(signed))
                 .collect(),
             signed,
+            marks: Vec::new(),
             size: (960, 700),
         })
     }

@@ -12,12 +12,13 @@ fn table(job: &dyn AnyJob) -> String {
     let mut md = format!(
         "<!-- generated from the job registry: TWV_UPDATE_DOCS=1 cargo test -p twv-tests docs:: -->\n\n\
          ## Options\n\n\
-         The flags of `twv {name}`, the keywords of `twv.{name}(model, …)` and the `options` of \
+         The flags of `twv {command}`, the keywords of `twv.{name}(model, …)` and the `options` of \
          `POST /api/{name}`; the defaults are the library's. Besides them: the model flags \
          (`--model`, `--ir`, `--params`, `--runtime`) and `--out`, `--json`, `--settings`, \
          `--print-settings` ([Jobs](../jobs.md)).\n\n\
          | flag (Python keyword) | unit | default | what it does |\n|---|---|---|---|\n",
-        name = job.name()
+        name = job.name(),
+        command = job.name().replace('_', "-")
     );
     for o in job.options() {
         let aliases: Vec<String> = o

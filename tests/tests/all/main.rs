@@ -26,5 +26,6 @@ mod report;
 mod serve;
 mod steady;
 mod steer;
+mod steer_map;
 mod sweep;
 mod sweep_lanes;

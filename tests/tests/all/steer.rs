@@ -35,7 +35,7 @@ fn benchmark() -> [DMatrix<f64>; 4] {
 
 /// The closed loop of the benchmark equations M q̈ + v C1 q̇ + (g K0 + v² K2) q = (0, T_δ),
 /// T_δ = K (φ, δ, φ̇, δ̇), as a first-order matrix.
-fn benchmark_closed_loop(v: f64, g: &SteerGains) -> DMatrix<f64> {
+pub(crate) fn benchmark_closed_loop(v: f64, g: &SteerGains) -> DMatrix<f64> {
     let [m, c1, k0, k2] = benchmark();
     let minv = m.try_inverse().unwrap();
     let stiffness = -&minv * (k0 * 9.81 + k2 * (v * v));
