@@ -363,15 +363,8 @@ def _axis_values(axis: dict[str, Any]) -> np.ndarray:
 class SteerMapResult(Result):
     """The steered loop's stability over speed × one steer gain (`twv.steer_map`): `speeds`
     [m/s], `values` of the gain, `abscissa` [value, speed] (the closed loop's largest eigenvalue
-    real part [1/s], NaN where not finite), `stable` and the band nobody steering."""
-
-    @property
-    def speeds(self) -> np.ndarray:
-        return np.array(self.raw["speeds"], dtype=float)
-
-    @property
-    def values(self) -> np.ndarray:
-        return np.array(self.raw["values"], dtype=float)
+    real part [1/s], NaN where not finite), `stable`, and nobody steering `weave_speed` and
+    `capsize_speed` (the JSON's own fields, read as every result's are)."""
 
     @property
     def abscissa(self) -> np.ndarray:
@@ -383,14 +376,6 @@ class SteerMapResult(Result):
     def stable(self) -> np.ndarray:
         """[value, speed]: every closed-loop eigenvalue has Re < 0."""
         return self.abscissa < 0
-
-    @property
-    def weave_speed(self) -> float | None:
-        return self.raw["weave_speed"]
-
-    @property
-    def capsize_speed(self) -> float | None:
-        return self.raw["capsize_speed"]
 
 
 class SweepResult(Result):
