@@ -346,8 +346,8 @@ pub fn steer(
     })
 }
 
-/// `x` or an empty CSV field.
-fn field(x: Option<f64>) -> String {
+/// `x` or an empty CSV field (the steer results' CSVs).
+pub(super) fn csv_field(x: Option<f64>) -> String {
     x.map_or(String::new(), |v| format!("{v}"))
 }
 
@@ -371,20 +371,20 @@ impl SteerResult {
                 format!("{}", p.speed),
                 format!("{}", p.self_stable),
                 status,
-                field(k.map(|k| k[0])),
-                field(k.map(|k| k[1])),
-                field(k.map(|k| k[2])),
-                field(k.map(|k| k[3])),
+                csv_field(k.map(|k| k[0])),
+                csv_field(k.map(|k| k[1])),
+                csv_field(k.map(|k| k[2])),
+                csv_field(k.map(|k| k[3])),
                 format!("{}", spectral_abscissa(&p.open_loop)),
-                field(c.map(|c| c.analysis.closed_loop.spectral_abscissa)),
-                field(c.map(|c| c.analysis.margins.disk.phase_deg)),
-                field(c.map(|c| c.analysis.margins.disk.gain_high)),
-                field(c.map(|c| c.analysis.margins.peak_sensitivity)),
+                csv_field(c.map(|c| c.analysis.closed_loop.spectral_abscissa)),
+                csv_field(c.map(|c| c.analysis.margins.disk.phase_deg)),
+                csv_field(c.map(|c| c.analysis.margins.disk.gain_high)),
+                csv_field(c.map(|c| c.analysis.margins.peak_sensitivity)),
                 p.ride.map_or(String::new(), |r| match r.diverged_at {
                     Some(t) => format!("diverged at {t} s"),
                     None => format!("{:?}", r.verdict),
                 }),
-                field(p.ride.and_then(|r| r.peak)),
+                csv_field(p.ride.and_then(|r| r.peak)),
                 format!("{}", p.met),
             ];
             out += &(row.join(",") + "\n");

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::steady::{steady_motion, SteadySettings};
-use super::steer::steer_loop;
+use super::steer::{csv_field, steer_loop};
 use crate::error::{Error, Result};
 use crate::linear::SteerGains;
 use crate::model::ResolvedModel;
@@ -271,11 +271,6 @@ fn short(x: f64) -> String {
     format!("{}", (x * 1e9).round() / 1e9)
 }
 
-/// `x` or an empty CSV field.
-fn field(x: Option<f64>) -> String {
-    x.map_or(String::new(), |v| format!("{v}"))
-}
-
 impl SteerMapResult {
     /// The varied gain's unit.
     fn unit(&self) -> &'static str {
@@ -309,7 +304,7 @@ impl SteerMapResult {
         for (jv, x) in self.values.iter().enumerate() {
             for (i, v) in self.speeds.iter().enumerate() {
                 let a = self.abscissa[jv * n + i];
-                out += &format!("{v},{x},{},{}\n", field(a), a.is_some_and(|a| a < 0.0));
+                out += &format!("{v},{x},{},{}\n", csv_field(a), a.is_some_and(|a| a < 0.0));
             }
         }
         out
