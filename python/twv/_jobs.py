@@ -89,8 +89,12 @@ def _signature(job: dict[str, Any]) -> inspect.Signature:
     for o in job["options"]:
         if o["required"]:
             params.append(P(o["name"], P.POSITIONAL_OR_KEYWORD))
+    # Optional, but may come by position (an option another can now stand in for).
     for o in job["options"]:
-        if not o["required"]:
+        if o["positional"] and not o["required"]:
+            params.append(P(o["name"], P.POSITIONAL_OR_KEYWORD, default=o["default"]))
+    for o in job["options"]:
+        if not o["required"] and not o["positional"]:
             params.append(P(o["name"], P.KEYWORD_ONLY, default=o["default"]))
     params.append(P("settings", P.KEYWORD_ONLY, default=None))
     params.append(P("out", P.KEYWORD_ONLY, default=None))

@@ -209,19 +209,8 @@ impl ModelTask for Ride<'_> {
         let traj = match &s.steer {
             None => integrate(OpenLoop::new(model, u), &x0, watch, &s.run, self.1)?,
             Some(settings) => {
-                let modes = resolved
-                    .ir
-                    .mechanics()
-                    .and_then(|m| m.steady_motion.as_ref())
-                    .map_or_else(Vec::new, |m| m.modes.clone());
-                let law = SteerLaw::<NX, NU>::new(
-                    resolved.name(),
-                    info.states,
-                    info.inputs,
-                    &modes,
-                    settings,
-                    u,
-                )?;
+                let law =
+                    SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, settings, u)?;
                 integrate(ClosedLoop::new(model, law), &x0, watch, &s.run, self.1)?
             }
         };

@@ -5,9 +5,11 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 use twv_model::Model;
 
+use super::steady::steady_state;
+use crate::control::steer::{SteerLaw, SteerSettings};
 use crate::control::{ControllerSettings, PidLoop, Plant};
 use crate::error::{Error, Result};
-use crate::integrate::{OpenLoop, VectorField};
+use crate::integrate::{ClosedLoop, OpenLoop, VectorField};
 use crate::lyapunov::{lyapunov_spectrum_observed, LyapunovResult, LyapunovSettings};
 use crate::model::{
     dispatch, dispatch_control, input_vector, state_vector, ControlTask, ModelTask, ResolvedModel,
@@ -21,8 +23,15 @@ use crate::progress::Progress;
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SpectrumSettings {
-    /// Initial model state, in the model's state order (controller states start at 0).
+    /// Initial model state, in the model's state order (controller states start at 0); empty
+    /// with `speed`.
     pub x0: Vec<f64>,
+    /// Start from the model's steady motion at this speed [m/s] instead of `x0` (models whose
+    /// IR describes straight running: the bicycle).
+    pub speed: Option<f64>,
+    /// Steer the model by this steer-torque law (a model with a steer input: the bicycle);
+    /// the spectrum is the steered bicycle's. `None`: not steered.
+    pub steer: Option<SteerSettings>,
     /// Constant input of an open-loop run; `None`: zeros.
     pub u: Option<Vec<f64>>,
     /// Closed loop under this controller; `None`: open loop.
@@ -51,6 +60,12 @@ pub struct SpectrumResult {
     /// The controller of a closed-loop spectrum.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub controller: Option<ControllerSettings>,
+    /// The steady motion's speed the run started from [m/s], and the steer law of a steered
+    /// spectrum.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steer: Option<SteerSettings>,
     /// The spectrum and its diagnostics.
     #[serde(flatten)]
     pub result: LyapunovResult,
@@ -83,6 +98,29 @@ impl SpectrumSettings {
         }
         if self.exponents == Some(0) {
             return Err(Error::input("exponents", "need at least one exponent"));
+        }
+        if let Some(v) = self.speed {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::input(
+                    "speed",
+                    format!("{v}: straight running forward needs a finite speed ≥ 0"),
+                ));
+            }
+            if !self.x0.is_empty() {
+                return Err(Error::input(
+                    "speed",
+                    "give either an initial state (x0) or a speed, not both",
+                ));
+            }
+        }
+        if let Some(law) = &self.steer {
+            law.validate()?;
+            if self.controller.is_some() {
+                return Err(Error::input(
+                    "steer_gains",
+                    "the steer law and the pitch controller are two different loops: give one",
+                ));
+            }
         }
         if self.controller.is_some() && self.u.is_some() {
             return Err(Error::input(
@@ -174,7 +212,7 @@ impl ModelTask for Open<'_> {
     fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
         self,
         model: &M,
-        _: &ResolvedModel,
+        resolved: &ResolvedModel,
     ) -> Result<Self::Output> {
         let info = model.info();
         let x0: [f64; NX] = state_vector("x0", &self.0.x0, info.states)?;
@@ -182,8 +220,14 @@ impl ModelTask for Open<'_> {
             Some(u) => input_vector("u", u, info.inputs)?,
             None => [0.0; NU],
         };
-        let field = OpenLoop::new(model, u);
-        let (result, timing) = timed(self.0, &field, &x0, self.1)?;
+        let (result, timing) = match &self.0.steer {
+            None => timed(self.0, &OpenLoop::new(model, u), &x0, self.1)?,
+            Some(settings) => {
+                let law =
+                    SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, settings, u)?;
+                timed(self.0, &ClosedLoop::new(model, law), &x0, self.1)?
+            }
+        };
         Ok((x0.to_vec(), u[..info.inputs.len()].to_vec(), result, timing))
     }
 }
@@ -217,6 +261,25 @@ pub fn spectrum(
     progress: &dyn Progress,
 ) -> Result<SpectrumResult> {
     settings.validate()?;
+    // From the steady motion at a speed: its state is the initial state.
+    let at_speed;
+    let settings = match settings.speed {
+        Some(v) => {
+            at_speed = SpectrumSettings {
+                x0: steady_state(model, v)?,
+                ..settings.clone()
+            };
+            &at_speed
+        }
+        None => settings,
+    };
+    if settings.x0.is_empty() {
+        return Err(Error::input(
+            "x0",
+            "the spectrum needs an initial state (x0) or a speed",
+        ));
+    }
+    let steered = settings.steer.is_some();
     let ((x0, u, result, timing), name) = match &settings.controller {
         Some(c) => (
             dispatch_control(model, c.n_states(), Closed(settings, c, progress))?,
@@ -224,7 +287,11 @@ pub fn spectrum(
         ),
         None => (
             dispatch(model, Open(settings, progress))?,
-            model.name().to_string(),
+            if steered {
+                format!("{} (steered)", model.name())
+            } else {
+                model.name().to_string()
+            },
         ),
     };
     Ok(SpectrumResult {
@@ -234,6 +301,8 @@ pub fn spectrum(
         u,
         settings: settings.lyapunov.clone(),
         controller: settings.controller.clone(),
+        speed: settings.speed,
+        steer: settings.steer,
         result,
         drift_states: drift_states(model),
         timing,

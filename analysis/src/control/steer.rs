@@ -111,6 +111,23 @@ impl<const NX: usize, const NU: usize> SteerLaw<NX, NU> {
         })
     }
 
+    /// The law on the resolved model `resolved` (states and inputs as its generated or
+    /// interpreted type names them), on the lean-and-steer modes its IR's steady motion names.
+    pub fn for_model(
+        resolved: &crate::model::ResolvedModel,
+        states: &[&str],
+        inputs: &[&str],
+        settings: &SteerSettings,
+        base: [f64; NU],
+    ) -> Result<Self> {
+        let modes = resolved
+            .ir
+            .mechanics()
+            .and_then(|m| m.steady_motion.as_ref())
+            .map_or_else(Vec::new, |m| m.modes.clone());
+        Self::new(resolved.name(), states, inputs, &modes, settings, base)
+    }
+
     /// The unsaturated torque command at `x`.
     fn command(&self, x: &[f64; NX]) -> f64 {
         self.modes

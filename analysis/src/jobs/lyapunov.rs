@@ -3,7 +3,7 @@
 
 use serde_json::{json, Value};
 
-use super::groups::{controller, integrator, optional};
+use super::groups::{controller, integrator, optional, steer};
 use super::options::{
     as_choice, as_integer, field, flag, integer, is_none, number, optional_number, optional_vector,
     sub, vector, Kind, Opt,
@@ -44,10 +44,18 @@ impl Job for Lyapunov {
             vector(
                 "x0",
                 "SI, rad",
-                "Initial state, in the model's state order",
+                "Initial state, in the model's state order (or --speed)",
                 field(|s: &mut SpectrumSettings| &mut s.x0),
             )
-            .required(),
+            .positional(),
+            optional_number(
+                "speed",
+                "m/s",
+                "Start from the model's steady motion at this speed instead of x0 (models whose \
+                 IR describes one, e.g. whipple)",
+                field(|s: &mut SpectrumSettings| &mut s.speed),
+            )
+            .conflicts(&["x0"]),
             optional_vector(
                 "u",
                 "N, N m",
@@ -55,6 +63,8 @@ impl Job for Lyapunov {
                 field(|s: &mut SpectrumSettings| &mut s.u),
             ),
         ];
+        // The steered bicycle: a steer-torque law closes its steer loop.
+        opts.extend(steer(|s: &mut SpectrumSettings| &mut s.steer));
         // The closed loop: the spectrum is that of model and controller states together.
         opts.extend(controller(
             optional(|s: &mut SpectrumSettings| &mut s.controller),
@@ -194,9 +204,6 @@ impl Job for Lyapunov {
         s: &SpectrumSettings,
         progress: &dyn Progress,
     ) -> Result<SpectrumResult> {
-        if s.x0.is_empty() {
-            return Err(Error::input("x0", "lyapunov needs the initial state"));
-        }
         spectrum(model, s, progress)
     }
 }

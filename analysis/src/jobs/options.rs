@@ -70,6 +70,9 @@ pub struct Opt<S> {
     pub help: &'static str,
     /// The job cannot run without it (it has no default).
     pub required: bool,
+    /// Python may give it by position too, after the required ones (an option that was
+    /// required before another could stand in for it).
+    pub positional: bool,
     /// Options that cannot be given with it.
     pub conflicts: &'static [&'static str],
     /// It may be given several times (the command line's repeated flag; a list in JSON).
@@ -88,6 +91,7 @@ pub struct OptionInfo {
     pub unit: &'static str,
     pub help: &'static str,
     pub required: bool,
+    pub positional: bool,
     pub many: bool,
     /// Its value in the job's default settings, in the option's own form (`null`: not set).
     pub default: Value,
@@ -111,6 +115,7 @@ impl<S: Clone + 'static> Opt<S> {
             unit,
             help,
             required: false,
+            positional: false,
             conflicts: &[],
             many: false,
             set: Box::new(set),
@@ -127,6 +132,12 @@ impl<S: Clone + 'static> Opt<S> {
     /// Has no default: the job needs it.
     pub fn required(mut self) -> Self {
         self.required = true;
+        self
+    }
+
+    /// May be given by position in Python (see [`Opt::positional`]'s field).
+    pub fn positional(mut self) -> Self {
+        self.positional = true;
         self
     }
 
@@ -174,6 +185,7 @@ impl<S: Clone + 'static> Opt<S> {
             unit: self.unit,
             help: self.help,
             required: self.required,
+            positional: self.positional,
             many: self.many,
             default: self.get(defaults),
         }

@@ -245,3 +245,70 @@ fn destabilising_gains_get_a_computed_verdict_and_bad_input_one_line() {
     );
     assert!(force.contains("force"), "{force}");
 }
+
+/// `lyap` of the steered bicycle from straight running at 3 m/s: the orbit is the steady
+/// motion itself, so the Lyapunov exponents are the real parts of the closed loop's
+/// eigenvalues — the four of the lean-and-steer loop (a pair's real part twice) and 0 for
+/// every other direction (position, heading, wheel angles, speed: no restoring force) — and
+/// unsteered the same holds with the open loop's eigenvalues, one of them > 0.
+#[test]
+fn the_steered_bicycles_lyapunov_spectrum_is_its_closed_loop_eigenvalues() {
+    use twv_analysis::api::{spectrum, SpectrumSettings};
+    use twv_analysis::lyapunov::{IntegratorChoice, LyapunovSettings};
+    let bike = bicycle();
+    // Lean-rate feedback alone: at 3 m/s the benchmark bicycle needs about 8 N m s/rad.
+    let g = SteerGains {
+        k_phi_dot: 15.0,
+        ..SteerGains::default()
+    };
+    let lp = steer_loop(&bike, 3.0).unwrap();
+    for gains in [Some(g), None] {
+        let eig = match gains {
+            Some(g) => lp.closed_loop(&g).unwrap().eigenvalues,
+            None => lp.open_loop_eigenvalues().unwrap(),
+        };
+        let s = SpectrumSettings {
+            speed: Some(3.0),
+            steer: gains.map(|gains| SteerSettings {
+                gains,
+                saturation: None,
+            }),
+            lyapunov: LyapunovSettings {
+                t_sample: 0.1,
+                iterations: 600,
+                transient: 10.0,
+                integrator: IntegratorChoice::Rk4 { h: 0.01 },
+                record_running: false,
+                trace_check: false,
+                ..LyapunovSettings::preset_paper()
+            },
+            ..SpectrumSettings::default()
+        };
+        let r = spectrum(&bike, &s, &Silent).unwrap();
+        let n = r.result.exponents.len();
+        let mut expected: Vec<f64> = eig.iter().map(|e| e.re).collect();
+        expected.resize(n, 0.0);
+        expected.sort_by(|a, b| b.total_cmp(a));
+        for (k, (got, want)) in r.result.exponents.iter().zip(&expected).enumerate() {
+            // 60 s of averaging after a 10 s transient: the finite-time exponents of a constant
+            // linear flow are within ~1/60 1/s of its real parts. The directions with no
+            // restoring force shear (the heading grows with the steer angle's integral), and
+            // theirs fall off only as ln t / t: 0.05 for those.
+            let tolerance = if *want == 0.0 { 0.05 } else { 0.03 };
+            assert!(
+                (got - want).abs() < tolerance,
+                "{} λ{}: {got} against Re {want} ({:?})",
+                r.model,
+                k + 1,
+                r.result.exponents
+            );
+        }
+        assert_eq!(r.model.ends_with("(steered)"), gains.is_some());
+        assert_eq!(
+            r.result.exponents[0] > 0.1,
+            gains.is_none(),
+            "{:?}",
+            r.result.exponents
+        );
+    }
+}
