@@ -21,7 +21,13 @@ pub enum OutputError {
 /// The files of a result, in memory: (name relative to the output folder, bytes). Jobs build
 /// them without touching the disk; [`Files::write`] is the one shared step that does.
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct Files(pub Vec<(String, Vec<u8>)>);
+pub struct Files {
+    /// (name, bytes), in order.
+    pub entries: Vec<(String, Vec<u8>)>,
+    /// Written into a folder that other runs write too (the shards of an array): see
+    /// [`Files::shared`].
+    shared: bool,
+}
 
 impl Files {
     /// No files yet.
@@ -29,9 +35,36 @@ impl Files {
         Self::default()
     }
 
+    /// These files for a folder that other runs write into too — the tasks of an array, each
+    /// with its own shard's files: [`Files::write`] then writes each file atomically and
+    /// touches nothing else there (no record of the run, no file of another run removed).
+    pub fn shared(mut self) -> Self {
+        self.shared = true;
+        self
+    }
+
+    /// See [`Files::shared`].
+    fn write_shared(&self, dir: &Path) -> Result<Written, OutputError> {
+        fs::create_dir_all(dir).map_err(|source| OutputError::Io {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+        let mut files = Vec::new();
+        for (name, bytes) in &self.entries {
+            let path = dir.join(name);
+            write_atomic(&path, bytes)?;
+            files.push(path);
+        }
+        Ok(Written {
+            files,
+            left: Vec::new(),
+        })
+    }
+
     /// A text file.
     pub fn text(&mut self, name: &str, text: impl Into<String>) {
-        self.0.push((name.to_string(), text.into().into_bytes()));
+        self.entries
+            .push((name.to_string(), text.into().into_bytes()));
     }
 
     /// A pretty-printed JSON file.
@@ -48,13 +81,13 @@ impl Files {
     ) -> Result<(), crate::plot::PlotError> {
         self.text(name, figure.svg()?);
         let stem = name.strip_suffix(".svg").unwrap_or(name);
-        self.0.push((format!("{stem}.png"), figure.png()?));
+        self.entries.push((format!("{stem}.png"), figure.png()?));
         Ok(())
     }
 
     /// The names, in order.
     pub fn names(&self) -> Vec<&str> {
-        self.0.iter().map(|(n, _)| n.as_str()).collect()
+        self.entries.iter().map(|(n, _)| n.as_str()).collect()
     }
 
     /// Writes every file into `dir` (created if missing, subfolders too), each atomically;
@@ -66,17 +99,20 @@ impl Files {
     /// link on the way) with the bytes twv wrote: a file the user changed, added to the list or
     /// linked elsewhere is left where it is, with a note in [`Written::left`].
     pub fn write(&self, dir: &Path) -> Result<Written, OutputError> {
+        if self.shared {
+            return self.write_shared(dir);
+        }
         let manifest = dir.join(MANIFEST);
         let previous = match fs::symlink_metadata(&manifest) {
             Ok(meta) if meta.is_file() => fs::read_to_string(&manifest).unwrap_or_default(),
             _ => String::new(),
         };
         let mut out = OutputDir::create(dir)?;
-        for (name, bytes) in &self.0 {
+        for (name, bytes) in &self.entries {
             out.write(name, bytes)?;
         }
         let listed: String = self
-            .0
+            .entries
             .iter()
             .map(|(name, bytes)| format!("{}  {name}\n", sha256_hex(bytes)))
             .collect();

@@ -204,6 +204,14 @@ fn shipped_models() -> Vec<&'static str> {
     twv_analysis::model::shipped_models()
 }
 
+/// The measured bicycle of the report's Monte Carlo, embedded (as vehicles/paper.toml is).
+fn measured_bicycle() -> twv_analysis::model::ParamSource {
+    twv_analysis::model::ParamSource::Text {
+        text: include_str!("../../vehicles/bicycles/browser.toml").to_string(),
+        origin: "vehicles/bicycles/browser.toml (embedded)".to_string(),
+    }
+}
+
 /// Builds the study's report into `out` (index.html, figures, data, results.json) from the
 /// embedded vehicle files or the parameter file `params`; returns results.json's text.
 #[pyfunction]
@@ -220,6 +228,7 @@ fn report(
         Some(p) => ReportSettings {
             params: ParamSource::File(p),
             quick,
+            measured_bicycle: Some(measured_bicycle()),
             ..ReportSettings::default()
         },
         None => ReportSettings {
@@ -227,6 +236,7 @@ fn report(
             segway_params: vehicle_defaults("segway7", PAPER_TOML, SEGWAY_TOML),
             params_text: Some(PAPER_TOML.to_string()),
             quick,
+            measured_bicycle: Some(measured_bicycle()),
             ..ReportSettings::default()
         },
     };

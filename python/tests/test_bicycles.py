@@ -76,3 +76,26 @@ def test_weave_and_capsize_speeds_are_the_packages(name):
     if steady.weave_speed is not None:
         assert abs(steady.weave_speed - crossings[0]) < 1e-6
         assert package_abscissa(bike, steady.weave_speed - 1e-3)[1], "a complex pair crosses"
+
+
+def test_each_draw_of_the_monte_carlo_is_the_closed_form_bicycle_of_its_values():
+    """`twv.uncertainty` on Pista: every draw's weave and capsize speeds (twv's derived model,
+    linearised) equal those of the closed-form Appendix A matrices of the values the draw
+    records (a second derivation), and the values vary by the file's standard deviations."""
+    model = twv.Model("whipple", params=FOLDER / "pista.toml")
+    r = twv.uncertainty(model, samples=6, speeds="2:8", gains="k_phi=20,k_phi_dot=10", seed=3)
+    assert r.draws.shape == (6, len(r.names)) and r.ok
+    assert r.weave_speeds.shape == (6,) and bool(np.all(r.stable))
+    nominal = read_parameters(FOLDER / "pista.toml")
+    varied = {v["name"] for v in r.varied}
+    for j, name in enumerate(r.names):
+        if name not in varied:
+            assert np.all(r.draws[:, j] == nominal[name]), name
+    for k in range(6):
+        values = dict(zip(r.names, r.draws[k], strict=True))
+        band = benchmark_matrices(values).stable_speed_range(lo=2.0, hi=8.0, step=0.05)
+        assert band is not None
+        assert abs(r.weave_speeds[k] - band[0]) < 1e-6, (k, r.weave_speeds[k], band)
+        assert abs(r.capsize_speeds[k] - band[1]) < 1e-6, (k, r.capsize_speeds[k], band)
+    frame = r.to_pandas()
+    assert list(frame["index"]) == list(range(6)) and "lambda" in frame.columns

@@ -378,6 +378,61 @@ class SteerMapResult(Result):
         return self.abscissa < 0
 
 
+class UncertaintyResult(Result):
+    """Monte Carlo over a measured bicycle's parameter uncertainty (`twv.uncertainty`): per
+    draw (one row each) the `draws` [draw, parameter] (columns `names`), `weave_speeds` and
+    `capsize_speeds` [m/s] and `disk_phase_margins` [deg] (NaN where a draw has none), `stable`
+    and `status`; the spreads are the JSON's `weave_speed`, `capsize_speed`,
+    `disk_phase_margin_deg` ({count, mean, sd, min, p05, p50, p95, max})."""
+
+    def _column(self, key: str) -> np.ndarray:
+        return np.array(
+            [np.nan if s[key] is None else s[key] for s in self.raw["samples"]], dtype=float
+        )
+
+    @property
+    def draws(self) -> np.ndarray:
+        """[draw, parameter]: the values drawn, in the order of `names`."""
+        return np.array([s["params"] for s in self.raw["samples"]], dtype=float)
+
+    @property
+    def weave_speeds(self) -> np.ndarray:
+        """Each draw's weave speed [m/s] (NaN: no self-stable band in the searched speeds)."""
+        return self._column("weave_speed")
+
+    @property
+    def capsize_speeds(self) -> np.ndarray:
+        """Each draw's capsize speed [m/s] (NaN: none)."""
+        return self._column("capsize_speed")
+
+    @property
+    def disk_phase_margins(self) -> np.ndarray:
+        """Each draw's disk phase margin at the steer torque [deg] (NaN: none)."""
+        return self._column("disk_phase_margin_deg")
+
+    @property
+    def stable(self) -> np.ndarray:
+        """Each draw's steered closed loop is stable at the check speed."""
+        return np.array([s["stable"] for s in self.raw["samples"]], dtype=bool)
+
+    def to_pandas(self):
+        """One row per draw: the quantities, then the drawn values."""
+        frame = _pandas().DataFrame(
+            {
+                "index": [s["index"] for s in self.raw["samples"]],
+                "status": [s["status"] for s in self.raw["samples"]],
+                "weave_speed": self.weave_speeds,
+                "capsize_speed": self.capsize_speeds,
+                "disk_phase_margin_deg": self.disk_phase_margins,
+                "stable": self.stable,
+            }
+        )
+        draws = self.draws
+        for j, name in enumerate(self.raw["names"]):
+            frame[name] = draws[:, j] if draws.size else []
+        return frame
+
+
 class SweepResult(Result):
     """A map over a (Kp, Kd[, Ki]) grid and model parameters: `value[..., p2, p1, ki, kd, kp]`
     (the parameter axes in reverse order in front; NaN unless `status` is ok) and `status` of
@@ -440,6 +495,7 @@ RESULTS: dict[str, type[Result]] = {
     "steady": SteadyResult,
     "steer": SteerResult,
     "steer_map": SteerMapResult,
+    "uncertainty": UncertaintyResult,
     "tune": TuneResult,
     "exponent": ExponentResult,
 }

@@ -114,7 +114,7 @@ pub fn describe(err: &anyhow::Error, command: &str) -> String {
 /// Which model to run and with which parameters.
 #[derive(Args, Debug, Clone, Default)]
 pub struct ModelArgs {
-    /// Shipped model: vehicle8, vehicle7, segway7, lorenz or henon_heiles [default: vehicle8]
+    /// Shipped model: vehicle8, vehicle7, segway7, lorenz, henon_heiles or whipple (the bicycle) [default: vehicle8]
     #[arg(long, value_name = "NAME", conflicts_with = "ir")]
     pub model: Option<String>,
     /// A model IR file (twv-ir/1) to run without recompiling twv (see --runtime)

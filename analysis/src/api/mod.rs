@@ -15,6 +15,7 @@
 //! | linear | [`LinearSettings`] | [`analyse`] | [`LinearReport`] |
 //! | tune | [`TuneSettings`] | [`tune_model`] | [`TuneReport`] |
 //! | sweep | [`SweepSettings`] | [`sweep()`], [`run_shard`] | points, [`ShardOutcome`] |
+//! | uncertainty | [`UncertaintySettings`] | [`uncertainty()`], [`merge_uncertainty`] | [`UncertaintyResult`] |
 //!
 //! [`json`] runs any of them with settings and result as JSON (the Python package, the page).
 
@@ -33,6 +34,7 @@ mod steer;
 mod steer_map;
 mod sweep;
 mod tune;
+mod uncertainty;
 
 pub use crate::progress::{CancelFlag, Progress, Silent};
 pub use audit::{
@@ -69,4 +71,9 @@ pub use sweep::{
 };
 pub use tune::{
     tilt_check, tune_model, tune_model_with, TiltCheck, TuneReport, TuneSettings, TuneVerdict,
+};
+pub use uncertainty::{
+    draw, merge as merge_uncertainty, merge_dir as merge_uncertainty_dir,
+    shard_files as uncertainty_shard_files, uncertainty, Evaluation, Sample, SampleStatus, Spread,
+    UncertaintyResult, UncertaintySettings, UncertaintyVerdict, Varied, MAX_DRAWS,
 };

@@ -24,7 +24,7 @@ pub const MAX_AXIS: usize = 1000;
 /// The speed step of the open-loop band's search [m/s]: its bounds are then refined to
 /// [`SteadySettings`]' tolerance (1e-13 m/s), so the step only has to be finer than the band
 /// (1.7 m/s wide for the benchmark bicycle, 0.8–2.5 m/s for the measured ones).
-const BAND_STEP: f64 = 0.05;
+pub(super) const BAND_STEP: f64 = 0.05;
 
 /// Settings of `twv steer-map`. Defaults beside each field.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

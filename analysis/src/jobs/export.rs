@@ -192,7 +192,7 @@ impl JobOutput for Exported {
             return Err(Error::input("export", "nothing was built"));
         }
         let mut f = Files::new();
-        f.0.push((self.file.clone(), self.data.clone()));
+        f.entries.push((self.file.clone(), self.data.clone()));
         f.json("export.json", self);
         Ok(f)
     }

@@ -38,6 +38,7 @@ mod steer;
 mod steer_map;
 mod sweep;
 mod tune;
+mod uncertainty;
 
 use std::marker::PhantomData;
 
@@ -62,6 +63,7 @@ pub use steer::Steer;
 pub use steer_map::SteerMap;
 pub use sweep::{Sweep, SweepPoints};
 pub use tune::Tune;
+pub use uncertainty::Uncertainty;
 
 use crate::error::{Error, Result};
 use crate::model::ResolvedModel;
@@ -332,8 +334,23 @@ macro_rules! registry {
 }
 
 registry![
-    Evaluate, Codegen, Audit, Lyapunov, Simulate, Disturb, Ride, Phase, Linearize, Steady, Steer,
-    SteerMap, Tune, Sweep, Exponent, Export,
+    Evaluate,
+    Codegen,
+    Audit,
+    Lyapunov,
+    Simulate,
+    Disturb,
+    Ride,
+    Phase,
+    Linearize,
+    Steady,
+    Steer,
+    SteerMap,
+    Uncertainty,
+    Tune,
+    Sweep,
+    Exponent,
+    Export,
 ];
 
 /// Every job.

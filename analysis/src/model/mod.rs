@@ -123,6 +123,10 @@ pub struct ResolvedModel {
     pub params: Vec<f64>,
     /// Where the values came from (a file, or a description of the defaults).
     pub params_origin: String,
+    /// One standard deviation of each value (IR order), from the parameter file's
+    /// `[uncertainty]` table; 0 where the file gives none (and for the IR's defaults). What
+    /// `twv uncertainty` draws from.
+    pub uncertainty: Vec<f64>,
     /// The native code of [`Engine::Jit`].
     pub native: Option<Arc<dyn NativeCode>>,
     /// The text of the IR, when it came from a file or is shipped (what an export carries);
@@ -220,15 +224,26 @@ impl ModelSpec {
                 None,
             ),
         };
-        let (params, params_origin) = match &self.params {
+        let (params, params_origin, uncertainty) = match &self.params {
             ParamSource::Defaults => (
                 ir.params().iter().map(|p| p.default).collect(),
                 format!("defaults of {}", ir.model()),
+                vec![0.0; ir.params().len()],
             ),
-            ParamSource::File(path) => (ir.load_params(path)?, path.display().to_string()),
+            ParamSource::File(path) => {
+                let file = path.display().to_string();
+                let text = std::fs::read_to_string(path).map_err(|e| twv_ir::ParamError {
+                    file: file.clone(),
+                    problem: twv_ir::ParamProblem::Io(e.to_string()),
+                })?;
+                let values = twv_ir::parse_params(&text, &file, ir.params())?;
+                let stds = twv_ir::parse_uncertainty(&text, &file, ir.params())?;
+                (values, file, stds)
+            }
             ParamSource::Text { text, origin } => (
                 twv_ir::parse_params(text, origin, ir.params())?,
                 origin.clone(),
+                twv_ir::parse_uncertainty(text, origin, ir.params())?,
             ),
         };
         let (engine, native) = match (engine, self.runtime) {
@@ -247,6 +262,7 @@ impl ModelSpec {
             ir,
             params,
             params_origin,
+            uncertainty,
             native,
             ir_text,
         })

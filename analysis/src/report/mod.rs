@@ -45,6 +45,10 @@ pub struct ReportSettings {
     pub quick: bool,
     /// The audit's tolerance (normwise relative error of a term). Default 1e-11.
     pub audit_tolerance: f64,
+    /// A measured bicycle's parameters with their `[uncertainty]` (front ends embed
+    /// vehicles/bicycles/browser.toml): the bicycle section's Monte Carlo. `None`: that part
+    /// says it had no measured bicycle.
+    pub measured_bicycle: Option<ParamSource>,
 }
 
 impl ReportSettings {
@@ -60,6 +64,7 @@ impl Default for ReportSettings {
             params_text: None,
             quick: false,
             audit_tolerance: AuditSettings::default().tolerance,
+            measured_bicycle: None,
         }
     }
 }
@@ -150,7 +155,7 @@ pub fn build(settings: &ReportSettings, progress: &dyn Progress) -> Result<Repor
     for f in &figures {
         files.text(&f.file, f.svg.clone());
         let stem = f.file.strip_suffix(".svg").unwrap_or(&f.file);
-        files.0.push((format!("{stem}.png"), f.png.clone()));
+        files.entries.push((format!("{stem}.png"), f.png.clone()));
     }
     for (name, text) in sections::data_files(&results) {
         files.text(&name, text);

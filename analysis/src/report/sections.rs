@@ -14,14 +14,14 @@ use crate::api::{
     analyse, audit_model, portraits, ride, simulate, spectrum, steady_motion, steer, sweep,
     tune_model_with, LinearSettings, PhaseSettings, Progress, RideResult, RideSettings,
     RideVerdict, SimSettings, SpectrumSettings, SteadyResult, SteadySettings, SteerLoopSettings,
-    SteerResult, SweepSettings, TuneSettings, AUDITED,
+    SteerResult, SweepSettings, TuneSettings, UncertaintyResult, UncertaintySettings, AUDITED,
 };
 use crate::audit::AuditSettings;
 use crate::control::steer::SteerSettings;
 use crate::control::{ControllerSettings, RunSettings, STUDY_PD};
 use crate::error::{Error, Result};
 use crate::lyapunov::{InitialBasis, LyapunovSettings};
-use crate::model::{ModelSource, ModelSpec, ResolvedModel};
+use crate::model::{ModelSource, ModelSpec, ParamSource, ResolvedModel};
 use crate::plot::{Curve, LineChart};
 use crate::sweep::{Grid, Metric, PointResult};
 
@@ -47,9 +47,21 @@ pub struct BicycleSection {
     pub unsteered: RideResult,
     /// The same push, steered by the schedule's gains at that speed.
     pub steered: RideResult,
+    /// A measured bicycle drawn within its parameters' uncertainty (Monte Carlo): its weave
+    /// and capsize speeds, and a steer design tuned on its nominal values checked at
+    /// [`PUSH_SPEED`] on every draw (`None`: no measured bicycle was given).
+    pub uncertainty: Option<UncertaintyResult>,
 }
 
-fn bicycle(quick: bool, progress: &dyn Progress) -> Result<BicycleSection> {
+/// Draws of the report's Monte Carlo (quick: fewer).
+const DRAWS: usize = 200;
+const QUICK_DRAWS: usize = 40;
+
+fn bicycle(
+    quick: bool,
+    measured: Option<&ParamSource>,
+    progress: &dyn Progress,
+) -> Result<BicycleSection> {
     let bike = ModelSpec::shipped("whipple").resolve()?;
     let steady = steady_motion(
         &bike,
@@ -93,11 +105,29 @@ fn bicycle(quick: bool, progress: &dyn Progress) -> Result<BicycleSection> {
         gains: gains.unwrap_or_default(),
         saturation: None,
     }))?;
+    let uncertainty = match measured {
+        Some(params) => {
+            let measured = ModelSpec::shipped("whipple")
+                .with_params(params.clone())
+                .resolve()?;
+            Some(crate::api::uncertainty(
+                &measured,
+                &UncertaintySettings {
+                    samples: if quick { QUICK_DRAWS } else { DRAWS },
+                    speed: PUSH_SPEED,
+                    ..UncertaintySettings::default()
+                },
+                progress,
+            )?)
+        }
+        None => None,
+    };
     Ok(BicycleSection {
         steady,
         steer: schedule,
         unsteered,
         steered,
+        uncertainty,
     })
 }
 
@@ -312,7 +342,7 @@ pub fn compute(settings: &ReportSettings, progress: &dyn Progress) -> Result<Rep
     )?;
     step()?;
 
-    let bicycle = bicycle(quick, quiet)?;
+    let bicycle = bicycle(quick, settings.measured_bicycle.as_ref(), quiet)?;
     step()?;
 
     let audit_ok = audit_check(&audit);
@@ -766,6 +796,36 @@ pub fn page(
         )?,
     );
 
+    page.heading(3, "A measured bicycle within its uncertainty");
+    match &b.uncertainty {
+        Some(u) => {
+            page.paragraph(&uncertainty_text(u));
+            for (file, fig) in u.figures() {
+                let caption = if file == "speeds.svg" {
+                    "The fraction of draws whose weave (capsize) speed is at most v: the \
+                     spread the measured parameters' stated uncertainty gives the self-stable \
+                     band; the vertical lines are the nominal bicycle's."
+                } else {
+                    "The fraction of draws whose disk phase margin at the steer torque is at \
+                     most the abscissa, steered by the design tuned on the nominal values."
+                };
+                add(
+                    &mut page,
+                    figure(
+                        progress,
+                        &format!("bicycle_uncertainty_{file}"),
+                        fig,
+                        caption,
+                    )?,
+                );
+            }
+        }
+        None => page.paragraph(
+            "No measured bicycle with an [uncertainty] table was given to this report, so this \
+             part was not computed.",
+        ),
+    }
+
     // 8. Claims.
     page.heading(2, "8. The study's claims, checked");
     let rows: Vec<Vec<String>> = r
@@ -781,6 +841,41 @@ pub fn page(
         r.machine
     ));
     Ok((page.finish("twv report"), figures))
+}
+
+/// The Monte Carlo in words, every number from the run.
+fn uncertainty_text(u: &UncertaintyResult) -> String {
+    let band = match (u.weave_speed, u.capsize_speed) {
+        (Some(w), Some(c)) => format!(
+            "its weave speed lies between {:.2} and {:.2} m/s and its capsize speed between \
+             {:.2} and {:.2} m/s in 90 % of the draws (5–95 %)",
+            w.p05, w.p95, c.p05, c.p95
+        ),
+        _ => "no draw has a self-stable band".to_string(),
+    };
+    let nominal = match (u.nominal.weave_speed, u.nominal.capsize_speed) {
+        (Some(w), Some(c)) => format!("self-stable from {w:.2} to {c:.2} m/s"),
+        _ => "self-stable at no speed searched".to_string(),
+    };
+    format!(
+        "{} parameters of {} vary within their stated standard deviations ({} draws, seed \
+         {}). Nominally the bicycle is {nominal}; {band}, and {} of {} draws are self-stable \
+         somewhere between {} and {} m/s. Steered at {} m/s by the gains tuned on the nominal \
+         values to `{}`, the closed loop is stable in {} of {} draws and meets the spec in {}.",
+        u.varied.len(),
+        u.params,
+        u.samples.len(),
+        u.seed,
+        u.self_stable,
+        u.physical,
+        u.lo,
+        u.hi,
+        u.speed,
+        u.spec,
+        u.stable,
+        u.physical,
+        u.meets_spec
+    )
 }
 
 /// How a push ride ended, in words, from its verdict.
@@ -822,6 +917,9 @@ pub fn data_files(r: &ReportResults) -> Vec<(String, String)> {
         r.bicycle.steady.csv(),
     ));
     out.push(("data/bicycle_steer.csv".to_string(), r.bicycle.steer.csv()));
+    if let Some(u) = &r.bicycle.uncertainty {
+        out.push(("data/bicycle_uncertainty.csv".to_string(), u.csv()));
+    }
     for sim in &r.recovery {
         out.push((
             format!("data/{}.csv", sim.scenario.replace(' ', "_")),

@@ -19,7 +19,7 @@ use crate::linear::margins::{loop_margins, GridOptions};
 use crate::linear::pitch::{LoopOptions, PidGains, PitchLoop};
 
 /// How the tuning ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum TuneStatus {
     /// Gains found and independently verified.
     Solved,

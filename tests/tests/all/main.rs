@@ -29,3 +29,4 @@ mod steer;
 mod steer_map;
 mod sweep;
 mod sweep_lanes;
+mod uncertainty;

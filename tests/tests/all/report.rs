@@ -7,7 +7,7 @@ use twv_analysis::api::{
 };
 use twv_analysis::control::ControllerSettings;
 use twv_analysis::lyapunov::LyapunovSettings;
-use twv_analysis::model::ModelSpec;
+use twv_analysis::model::{ModelSpec, ParamSource};
 use twv_analysis::report::{build, recovery_finding, trace_check, ReportSettings};
 
 #[test]
@@ -162,12 +162,26 @@ fn the_bicycle_finding_follows_its_runs() {
     let report = build(
         &ReportSettings {
             quick: true,
+            measured_bicycle: Some(ParamSource::File(super::common::repo(
+                "vehicles/bicycles/browser.toml",
+            ))),
             ..ReportSettings::default()
         },
         &Silent,
     )
     .unwrap();
     let b = &report.results.bicycle;
+    // The Monte Carlo part: Browser's draws, their counts consistent, the text from them.
+    let u = b
+        .uncertainty
+        .as_ref()
+        .expect("a measured bicycle was given");
+    assert_eq!(u.samples.len(), 40);
+    assert!(report.html.contains(&format!(
+        "the closed loop is stable in {} of {} draws",
+        u.stable, u.physical
+    )));
+    assert!(report.html.contains("bicycle_uncertainty_speeds.svg"));
     assert_eq!(b.unsteered.verdict, RideVerdict::Fell);
     assert_eq!(b.steered.verdict, RideVerdict::Recovered);
     assert!(b.steer.points.iter().all(|p| p.met));

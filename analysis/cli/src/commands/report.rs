@@ -30,6 +30,14 @@ pub struct ReportArgs {
     pub audit_tolerance: Option<f64>,
 }
 
+/// The measured bicycle of the report's Monte Carlo, embedded (as vehicles/paper.toml is).
+fn measured_bicycle() -> ParamSource {
+    ParamSource::Text {
+        text: include_str!("../../../../vehicles/bicycles/browser.toml").to_string(),
+        origin: "vehicles/bicycles/browser.toml (embedded)".to_string(),
+    }
+}
+
 pub fn run(args: &ReportArgs, ctx: &Context) -> Result<Outcome> {
     let defaults = ReportSettings::default();
     let audit_tolerance = args.audit_tolerance.unwrap_or(defaults.audit_tolerance);
@@ -44,6 +52,7 @@ pub fn run(args: &ReportArgs, ctx: &Context) -> Result<Outcome> {
             params_text: None,
             quick: args.quick,
             audit_tolerance,
+            measured_bicycle: Some(measured_bicycle()),
         },
         None => ReportSettings {
             params: ctx.vehicle_defaults("vehicle8").unwrap_or_default(),
@@ -51,6 +60,7 @@ pub fn run(args: &ReportArgs, ctx: &Context) -> Result<Outcome> {
             params_text: Some(ctx.paper_toml().to_string()),
             quick: args.quick,
             audit_tolerance,
+            measured_bicycle: Some(measured_bicycle()),
         },
     };
     let bar = ctx.bar();
@@ -58,7 +68,7 @@ pub fn run(args: &ReportArgs, ctx: &Context) -> Result<Outcome> {
         Ok(report) => report,
         Err(outcome) => return Ok(outcome),
     };
-    let files = report.files.0.len();
+    let files = report.files.entries.len();
     for note in report.files.write(&out)?.left {
         ctx.say(format!("note: {note}"));
     }
