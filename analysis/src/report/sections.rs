@@ -847,8 +847,8 @@ pub fn page(
 fn uncertainty_text(u: &UncertaintyResult) -> String {
     let band = match (u.weave_speed, u.capsize_speed) {
         (Some(w), Some(c)) => format!(
-            "its weave speed lies between {:.2} and {:.2} m/s and its capsize speed between \
-             {:.2} and {:.2} m/s in 90 % of the draws (5–95 %)",
+            "in 90 % of the draws that have a self-stable band (5–95 %) its weave speed lies \
+             between {:.2} and {:.2} m/s and its capsize speed between {:.2} and {:.2} m/s",
             w.p05, w.p95, c.p05, c.p95
         ),
         _ => "no draw has a self-stable band".to_string(),
