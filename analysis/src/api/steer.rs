@@ -346,6 +346,16 @@ pub fn steer(
     })
 }
 
+/// Refuses non-finite steer gains, naming the option `gains` and the gain.
+pub(super) fn finite_gains(g: &SteerGains) -> Result<()> {
+    for (name, k) in SteerGains::NAMES.iter().zip(g.row()) {
+        if !k.is_finite() {
+            return Err(Error::input("gains", format!("{name} = {k} is not finite")));
+        }
+    }
+    Ok(())
+}
+
 /// `x` or an empty CSV field (the steer results' CSVs).
 pub(super) fn csv_field(x: Option<f64>) -> String {
     x.map_or(String::new(), |v| format!("{v}"))

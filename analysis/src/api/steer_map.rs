@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::steady::{steady_motion, SteadySettings};
-use super::steer::{csv_field, steer_loop};
+use super::steer::{csv_field, finite_gains, steer_loop};
 use crate::error::{Error, Result};
 use crate::linear::SteerGains;
 use crate::model::ResolvedModel;
@@ -93,12 +93,7 @@ impl SteerMapSettings {
             ));
         }
         self.gain_index()?;
-        for (name, k) in SteerGains::NAMES.iter().zip(self.gains.row()) {
-            if !k.is_finite() {
-                return Err(Error::input("gains", format!("{name} = {k} is not finite")));
-            }
-        }
-        Ok(())
+        finite_gains(&self.gains)
     }
 
     /// The varied gain's position in [`SteerGains::NAMES`].

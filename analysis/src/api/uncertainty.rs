@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::steady::{steady_motion, SteadySettings};
-use super::steer::{csv_field, steer_loop};
+use super::steer::{csv_field, finite_gains, steer_loop};
 use super::steer_map::BAND_STEP;
 use crate::error::{Error, Result};
 use crate::linear::SteerGains;
@@ -105,11 +105,7 @@ impl UncertaintySettings {
             ));
         }
         if let Some(g) = &self.gains {
-            for (name, k) in SteerGains::NAMES.iter().zip(g.row()) {
-                if !k.is_finite() {
-                    return Err(Error::input("gains", format!("{name} = {k} is not finite")));
-                }
-            }
+            finite_gains(g)?;
         }
         crate::tune::steer::check_spec(&self.spec)?;
         Shard::new(self.shard.index, self.shard.count)
@@ -780,18 +776,8 @@ impl UncertaintyResult {
 
 /// The shard files `uncertainty-shard-i-of-N.json` in `dir`, sorted by name.
 pub fn shard_files(dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>> {
-    let entries = std::fs::read_dir(dir)
-        .map_err(|e| Error::input("dir", format!("{}: cannot be read: {e}", dir.display())))?;
-    let mut paths: Vec<std::path::PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.file_name().and_then(|n| n.to_str()).is_some_and(|n| {
-                n.starts_with("uncertainty-shard-") && n.contains("-of-") && n.ends_with(".json")
-            })
-        })
-        .collect();
-    paths.sort();
-    Ok(paths)
+    crate::sweep::shard_files_named(dir, "uncertainty-shard-")
+        .map_err(|e| Error::input("dir", format!("{}: cannot be read: {e}", dir.display())))
 }
 
 /// Reads the shards of one run in `dir`, merges them ([`merge`]) and writes the whole run's

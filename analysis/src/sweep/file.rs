@@ -86,15 +86,20 @@ impl ShardFile {
 
 /// The shard files in `dir` (`shard-*-of-*.json`), sorted by name for a stable order.
 pub fn shard_paths(dir: &Path) -> Result<Vec<PathBuf>, SweepError> {
-    let entries = std::fs::read_dir(dir).map_err(|e| SweepError::File {
+    shard_files_named(dir, "shard-").map_err(|e| SweepError::File {
         path: dir.to_path_buf(),
         reason: e.to_string(),
-    })?;
-    let mut paths: Vec<PathBuf> = entries
+    })
+}
+
+/// The files `<prefix>*-of-*.json` in `dir`, sorted by name: the shard files of a sweep, or of
+/// another sharded job (`uncertainty-shard-`).
+pub fn shard_files_named(dir: &Path, prefix: &str) -> std::io::Result<Vec<PathBuf>> {
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
             p.file_name().and_then(|n| n.to_str()).is_some_and(|n| {
-                n.starts_with("shard-") && n.contains("-of-") && n.ends_with(".json")
+                n.starts_with(prefix) && n.contains("-of-") && n.ends_with(".json")
             })
         })
         .collect();

@@ -29,7 +29,7 @@ mod shard;
 pub use config::{Metric, MetricSettings, SweepConfig};
 pub use error::{ranges, SweepError};
 pub use fall::FallStop;
-pub use file::{shard_paths, ShardFile, SHARD_FORMAT};
+pub use file::{shard_files_named, shard_paths, ShardFile, SHARD_FORMAT};
 pub use grid::{Axis, Grid, ParamAxis, TILT_AXIS};
 pub use lanes::max_lyapunov_lanes;
 pub use merge::{collect, merge, Map, MAP_FORMAT};
