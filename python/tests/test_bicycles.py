@@ -99,3 +99,35 @@ def test_each_draw_of_the_monte_carlo_is_the_closed_form_bicycle_of_its_values()
         assert abs(r.capsize_speeds[k] - band[1]) < 1e-6, (k, r.capsize_speeds[k], band)
     frame = r.to_pandas()
     assert list(frame["index"]) == list(range(6)) and "lambda" in frame.columns
+
+
+def test_the_steered_linearisation_is_python_controls_feedback_on_the_closed_form_bicycle():
+    """`twv.linearize(speed=, steer_gains=)` on Browser at 3 m/s: the steer loop's poles are
+    those of python-control's `feedback` of the closed-form Appendix A plant with the same
+    gains (a second derivation, a second library), and its classical phase margin at the steer
+    torque is python-control's `stability_margins` of L(s) = -K (sI - A)^-1 b."""
+    control = pytest.importorskip("control")
+    model = twv.Model("whipple", params=FOLDER / "browser.toml")
+    gains = {"k_phi": 5.0, "k_delta": 0.0, "k_phi_dot": 15.0, "k_delta_dot": 0.0}
+    lin = twv.linearize(model, speed=3.0, steer_gains=gains)
+    st = lin.steer
+    assert lin.margins is None and lin.loop_poles.size == 0  # no pitch
+    bench = benchmark_matrices(read_parameters(FOLDER / "browser.toml"))
+    a = bench.state_matrix(3.0)
+    b = np.zeros((4, 1))
+    b[2:, 0] = np.linalg.inv(bench.M)[:, 1]
+    k = np.array([[gains["k_phi"], gains["k_delta"], gains["k_phi_dot"], gains["k_delta_dot"]]])
+    plant = control.ss(a, b, np.eye(4), np.zeros((4, 1)))
+    closed = control.feedback(plant, k, sign=1)
+    theirs = np.sort_complex(control.poles(closed))
+    ours = np.sort_complex(st["poles"])
+    assert np.allclose(ours, theirs, rtol=1e-8, atol=1e-8), (ours, theirs)
+    assert st["stable"] == bool(np.all(theirs.real < 0))
+    loop = -control.ss(a, b, k, np.zeros((1, 1)))
+    _, pm, sm, _, wgc, _ = control.stability_margins(loop)
+    m = st["margins"]
+    assert m is not None
+    assert abs(m["phase_margin"]["deg"] - pm) < 1e-3, (m, pm)
+    assert abs(m["phase_margin"]["frequency"] - wgc) < 1e-3 * wgc
+    # python-control's stability margin is the Nyquist curve's distance to -1: 1 / peak |S|.
+    assert abs(m["peak_sensitivity"] - 1 / sm) < 1e-3 * m["peak_sensitivity"], (m, sm)

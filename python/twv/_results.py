@@ -199,13 +199,32 @@ class LinearResult(Result):
 
     @property
     def loop_poles(self) -> np.ndarray:
-        """The closed pitch loop's poles [1/s], complex."""
-        return _complex(self.raw["pitch"]["loop_poles"])
+        """The closed pitch loop's poles [1/s], complex (empty for a model without a pitch)."""
+        pitch = self.raw["pitch"]
+        return _complex(pitch["loop_poles"] if pitch else [])
 
     @property
     def margins(self) -> dict[str, Any] | None:
-        """Gain, phase, delay and disk margins of a stable loop (None otherwise)."""
-        return self.raw["pitch"]["margins"]
+        """Gain, phase, delay and disk margins of a stable pitch loop (None otherwise)."""
+        pitch = self.raw["pitch"]
+        return pitch["margins"] if pitch else None
+
+    @property
+    def steer(self) -> dict[str, Any] | None:
+        """The steer loop closed about the steady motion (`speed=`, `steer_gains=`): its `poles`
+        (complex), whether it is `stable`, its `margins` at the steer torque (None when
+        unstable) and every state's closed-loop `eigenvalues` (complex); None without a law."""
+        st = self.raw.get("steer")
+        if st is None:
+            return None
+        return {
+            "law": st["law"],
+            "modes": st["modes"],
+            "poles": _complex(st["loop_poles"]["eigenvalues"]),
+            "stable": st["loop_poles"]["stable"],
+            "margins": st["margins"],
+            "eigenvalues": _complex([m["eigenvalue"] for m in st["closed_loop"]]),
+        }
 
     @property
     def lqr(self) -> dict[str, Any] | None:

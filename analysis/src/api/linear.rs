@@ -1,15 +1,19 @@
-//! Linearisation at an equilibrium: modes, the pitch loop's closed-loop poles and — only when
-//! that loop is stable — its margins, and an LQR design for comparison: `twv linear`.
+//! Linearisation at an equilibrium or a steady motion: modes, the pitch loop's closed-loop
+//! poles and — only when that loop is stable — its margins, an LQR design for comparison, and
+//! for a two-wheeler with a steer input the steer loop's poles and margins: `twv linear`.
 
 use nalgebra::{Complex, DMatrix};
 use serde::{Deserialize, Serialize};
 use twv_model::{Model, ModelInfo};
 
-use crate::control::Plant;
+use crate::control::steer::SteerSettings;
+use crate::control::{Plant, PITCH_STATES};
 use crate::error::{Error, Result};
+use crate::linear::steer::STEER_INPUT;
 use crate::linear::{
     analyse_pitch, linearize, loop_response, lqr, modes, CareStatus, HiddenPart, Linearization,
     LoopOptions, LoopResponse, Lqr, Margins, Mode, OperatingPoint, PidGains, PitchLoop,
+    SteerClosedLoop,
 };
 use crate::model::{dispatch, state_vector, ModelTask, ResolvedModel};
 use crate::output::Files;
@@ -32,12 +36,19 @@ pub enum At {
 }
 
 /// What to analyse. Defaults: upright, the study's PD, no lag or delay, LQR weights Q = I,
-/// R = 1e-4 I.
+/// R = 1e-4 I, no steer law.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct LinearSettings {
     /// The operating point.
     pub at: At,
+    /// Linearise about the model's steady motion at this speed [m/s] instead of `at` (models
+    /// whose IR describes one: the bicycle running straight and upright).
+    pub speed: Option<f64>,
+    /// A steer-torque law to close (a two-wheeler with a steer input, at a `speed`): its
+    /// closed-loop poles and its margins at the steer torque. A torque limit is not active at
+    /// the steady motion (the law commands 0 there), so the linear loop is the unsaturated one.
+    pub steer: Option<SteerSettings>,
     /// Pitch PID gains.
     pub gains: PidGains,
     /// Actuator lag and delay in the loop.
@@ -65,6 +76,8 @@ impl Default for LinearSettings {
     fn default() -> Self {
         Self {
             at: At::Upright,
+            speed: None,
+            steer: None,
             gains: crate::control::STUDY_PD,
             loop_options: LoopOptions::default(),
             lqr_q: 1.0,
@@ -84,6 +97,24 @@ impl LinearSettings {
             }
         }
         self.loop_options.check()?;
+        if let Some(v) = self.speed {
+            super::check_speed(v)?;
+            if self.at != At::Upright {
+                return Err(Error::input(
+                    "speed",
+                    "give either an operating point (at) or a speed, not both",
+                ));
+            }
+        }
+        if let Some(law) = &self.steer {
+            law.validate()?;
+            if self.speed.is_none() {
+                return Err(Error::input(
+                    "steer_gains",
+                    "the steer loop is closed about a steady motion: give its speed too",
+                ));
+            }
+        }
         if self.frequency_points > MAX_FREQUENCY_POINTS {
             return Err(Error::input(
                 "frequency_points",
@@ -231,6 +262,23 @@ impl PitchReport {
     }
 }
 
+/// The steer loop closed about the steady motion: T_δ = K (φ, δ, φ̇, δ̇).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SteerReport {
+    /// The law's gains and torque limit.
+    pub law: SteerSettings,
+    /// The lean-and-steer states the gains act on, in the gains' order.
+    pub modes: Vec<String>,
+    /// The lean-and-steer loop's poles (eigenvalues of A + b K on the modes), their abscissa and
+    /// whether every one has Re < 0.
+    pub loop_poles: SteerClosedLoop,
+    /// The margins at the steer torque (gain, phase, delay, disk), only for a stable loop.
+    pub margins: Option<StableMargins>,
+    /// Every state's modes with the law closed (the loop's poles and the steady motion's
+    /// drift: position, heading, wheel angle, the speed nothing restores).
+    pub closed_loop: Vec<Mode>,
+}
+
 /// Everything `twv linear` finds.
 #[derive(Debug, Clone, Serialize)]
 pub struct LinearReport {
@@ -240,9 +288,13 @@ pub struct LinearReport {
     pub params: String,
     /// The state linearised about.
     pub at: Vec<f64>,
-    /// max |f| there (0 at an equilibrium).
+    /// The steady motion's speed [m/s] when linearised about one (`None`: an equilibrium).
+    pub speed: Option<f64>,
+    /// max |f| there (0 at an equilibrium); at a steady motion over the states it holds (its
+    /// modes and its speed: position and heading advance steadily).
     pub residual: f64,
-    /// Whether the point is an equilibrium (residual within [`equilibrium_tolerance`]).
+    /// Whether the point is an equilibrium, or a steady motion (residual within
+    /// [`equilibrium_tolerance`]).
     pub equilibrium: bool,
     /// Open-loop modes.
     pub open_loop: Vec<Mode>,
@@ -250,8 +302,10 @@ pub struct LinearReport {
     pub gains: PidGains,
     /// Lag and delay.
     pub loop_options: LoopOptions,
-    /// The pitch loop.
-    pub pitch: PitchReport,
+    /// The pitch loop; `None` for a model without a pitch (states phi and w_y).
+    pub pitch: Option<PitchReport>,
+    /// The steer loop, when a steer law was given.
+    pub steer: Option<SteerReport>,
     /// States of the LQR design.
     pub lqr_states: Vec<String>,
     /// The LQR design, when the cart–pendulum part can be cut out.
@@ -299,32 +353,48 @@ impl ModelTask for Linear<'_> {
     ) -> Result<LinearReport> {
         let s = self.0;
         let info = model.info();
-        let at = match &s.at {
-            At::Upright => OperatingPoint::Upright,
-            At::Hanging => OperatingPoint::Hanging,
-            At::State(x) => OperatingPoint::State(state_vector("at", x, info.states)?),
+        let at = match (&s.at, s.speed) {
+            (_, Some(v)) => OperatingPoint::State(state_vector(
+                "speed",
+                &super::steady_state(resolved, v)?,
+                info.states,
+            )?),
+            (At::Upright, None) => OperatingPoint::Upright,
+            (At::Hanging, None) => OperatingPoint::Hanging,
+            (At::State(x), None) => OperatingPoint::State(state_vector("at", x, info.states)?),
         };
         let lin = linearize(model, &at, &[0.0; NU])?;
         let (a, b_full) = lin.dynamic();
         let b = b_full.columns(0, info.inputs.len()).into_owned();
-        let equilibrium = lin.residual <= equilibrium_tolerance(&a, &lin.x0);
+        let residual = match s.speed {
+            Some(_) => steady_residual(model, &lin.x0, &held_states(resolved)),
+            None => lin.residual,
+        };
+        let equilibrium = residual <= equilibrium_tolerance(&a, &lin.x0);
         if !equilibrium && !s.allow_non_equilibrium {
             return Err(Error::input(
-                "at",
+                if s.speed.is_some() { "speed" } else { "at" },
                 format!(
-                    "not an equilibrium: max |f| = {:.3e} there (allow it explicitly to linearise \
-                     along a trajectory)",
-                    lin.residual
+                    "not an equilibrium: max |f| = {residual:.3e} there (allow it explicitly to \
+                     linearise along a trajectory)",
                 ),
             ));
         }
         let open_loop = modes(&a, &lin.states)?;
-        let pitch = PitchReport::of(
-            &pitch_loop(&lin, &info, resolved)?,
-            &s.gains,
-            &s.loop_options,
-            s.frequency_points,
-        )?;
+        let pitch = if PITCH_STATES.iter().all(|n| info.states.contains(n)) {
+            Some(PitchReport::of(
+                &pitch_loop(&lin, &info, resolved)?,
+                &s.gains,
+                &s.loop_options,
+                s.frequency_points,
+            )?)
+        } else {
+            None
+        };
+        let steer = match (&s.steer, s.speed) {
+            (Some(law), Some(v)) => Some(steer_report(resolved, &a, &b, &lin.states, law, v)?),
+            _ => None,
+        };
         let (lqr, lqr_note) = match lin.subsystem(&LQR_STATES) {
             Ok((a_sub, b_sub)) => {
                 // Only the model's own inputs (an interpreted model may carry padding ones).
@@ -350,12 +420,14 @@ impl ModelTask for Linear<'_> {
             model: resolved.name().to_string(),
             params: resolved.params_origin.clone(),
             at: lin.x0.to_vec(),
-            residual: lin.residual,
+            speed: s.speed,
+            residual,
             equilibrium,
             open_loop,
             gains: s.gains,
             loop_options: s.loop_options,
             pitch,
+            steer,
             lqr_states: LQR_STATES.iter().map(|s| s.to_string()).collect(),
             lqr,
             lqr_note,
@@ -365,6 +437,73 @@ impl ModelTask for Linear<'_> {
             b,
         })
     }
+}
+
+/// The states a steady motion holds constant: the modes its IR studies and its speed (the
+/// coordinates it advances, position and heading, are the others).
+fn held_states(model: &ResolvedModel) -> Vec<String> {
+    model
+        .ir
+        .mechanics()
+        .and_then(|m| m.steady_motion.as_ref())
+        .map_or_else(Vec::new, |m| {
+            let mut held = m.modes.clone();
+            held.push(m.speed_state.clone());
+            held
+        })
+}
+
+/// max |f(x0)| over the `held` states: zero at a steady motion, where those are at rest while
+/// the position and heading advance at a constant rate.
+fn steady_residual<const NX: usize, const NU: usize, M: Model<NX, NU>>(
+    model: &M,
+    x0: &[f64; NX],
+    held: &[String],
+) -> f64 {
+    let mut f = [0.0; NX];
+    model.f(x0, &[0.0; NU], &mut f);
+    let states = model.info().states;
+    f.iter()
+        .zip(states)
+        .filter(|(_, n)| held.iter().any(|h| h == *n))
+        .fold(0.0_f64, |m, (v, _)| m.max(v.abs()))
+}
+
+/// The steer loop closed about the steady motion at `speed`: its poles and margins on the
+/// lean-and-steer plant ([`super::steer_loop`], the IR's steady-motion Jacobian) and every
+/// state's modes of A + b K (the model's own Jacobian `a`, `b`).
+fn steer_report(
+    resolved: &ResolvedModel,
+    a: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    states: &[String],
+    law: &SteerSettings,
+    speed: f64,
+) -> Result<SteerReport> {
+    let lp = super::steer_loop(resolved, speed)?;
+    let analysis = lp.analyse(&law.gains)?;
+    let input = resolved
+        .inputs()
+        .iter()
+        .position(|n| *n == STEER_INPUT)
+        .expect("steer_loop found the steer input");
+    let mut closed = a.clone();
+    for (mode, k) in lp.modes().iter().zip(law.gains.row()) {
+        let j = states
+            .iter()
+            .position(|n| n == mode)
+            .expect("steer_loop's modes are states");
+        for i in 0..closed.nrows() {
+            closed[(i, j)] += b[(i, input)] * k;
+        }
+    }
+    Ok(SteerReport {
+        law: *law,
+        modes: lp.modes().to_vec(),
+        margins: StableMargins::of(&analysis.margins),
+        loop_poles: analysis.closed_loop,
+        closed_loop: modes(&closed, states)?,
+    })
 }
 
 /// The linear analysis of `model` with `settings`.
@@ -391,6 +530,77 @@ fn list(values: &[Complex<f64>]) -> String {
     values.iter().map(complex).collect::<Vec<_>>().join(", ")
 }
 
+/// One line per mode; repeated eigenvalues share one eigenspace, so each group is printed once
+/// with its multiplicity.
+fn mode_lines(modes: &[Mode]) -> String {
+    let mut s = String::new();
+    let mut i = 0;
+    while i < modes.len() {
+        let m = &modes[i];
+        let same = modes[i..]
+            .iter()
+            .take_while(|n| n.kind == m.kind && n.states == m.states)
+            .count();
+        let value = if same > 1 {
+            format!("{} (×{same})", complex(&m.eigenvalue))
+        } else {
+            complex(&m.eigenvalue)
+        };
+        s += &format!("    {value:<28} {:?} ({})\n", m.kind, m.states.join(", "));
+        i += same;
+    }
+    s
+}
+
+/// The margins of a stable loop, two lines.
+fn margin_lines(m: &StableMargins) -> String {
+    let or_any =
+        |v: Option<f64>, unit: &str| v.map_or("unbounded".to_string(), |v| format!("{v:.4}{unit}"));
+    format!(
+        "    gain margin [{:.4}, {}], phase margin {}, delay margin {}\n    disk margin α = \
+         {:.4}: gain [{:.4}, {}], phase ±{:.2}°; peak |S| = {:.3}\n",
+        m.gain_margin_lower,
+        or_any(m.gain_margin_upper, ""),
+        m.phase_margin
+            .map_or("unbounded (no gain crossover)".to_string(), |p| {
+                format!("{:.2}° at {:.3} rad/s", p.deg, p.frequency)
+            }),
+        or_any(m.delay_margin, " s"),
+        m.disk_alpha,
+        m.disk_gain_low,
+        or_any(m.disk_gain_high, ""),
+        m.disk_phase_deg,
+        m.peak_sensitivity
+    )
+}
+
+impl SteerReport {
+    /// The law, its verdict, the loop's poles, the margins, and every state's closed-loop modes.
+    pub fn summary(&self) -> String {
+        let g = &self.law.gains;
+        let mut s = format!(
+            "  steer loop k_phi = {}, k_delta = {}, k_phi_dot = {}, k_delta_dot = {}: {}\n",
+            g.k_phi,
+            g.k_delta,
+            g.k_phi_dot,
+            g.k_delta_dot,
+            if self.loop_poles.stable {
+                "stable"
+            } else {
+                "UNSTABLE"
+            }
+        );
+        s += &format!("    loop poles: {}\n", list(&self.loop_poles.eigenvalues));
+        match &self.margins {
+            Some(m) => s += &margin_lines(m),
+            None => s += "    unstable: margins undefined\n",
+        }
+        s += "  closed-loop modes (every state):\n";
+        s += &mode_lines(&self.closed_loop);
+        s
+    }
+}
+
 impl PitchReport {
     /// The verdict, the poles and (for a stable loop) the margins, a few lines.
     pub fn summary(&self) -> String {
@@ -411,29 +621,7 @@ impl PitchReport {
             );
         }
         match (&self.margins, self.verdict) {
-            (Some(m), _) => {
-                let or_any = |v: Option<f64>, unit: &str| {
-                    v.map_or("unbounded".to_string(), |v| format!("{v:.4}{unit}"))
-                };
-                s += &format!(
-                    "    gain margin [{:.4}, {}], phase margin {}, delay margin {}\n",
-                    m.gain_margin_lower,
-                    or_any(m.gain_margin_upper, ""),
-                    m.phase_margin
-                        .map_or("unbounded (no gain crossover)".to_string(), |p| {
-                            format!("{:.2}° at {:.3} rad/s", p.deg, p.frequency)
-                        }),
-                    or_any(m.delay_margin, " s"),
-                );
-                s += &format!(
-                    "    disk margin α = {:.4}: gain [{:.4}, {}], phase ±{:.2}°; peak |S| = {:.3}\n",
-                    m.disk_alpha,
-                    m.disk_gain_low,
-                    or_any(m.disk_gain_high, ""),
-                    m.disk_phase_deg,
-                    m.peak_sensitivity
-                );
-            }
+            (Some(m), _) => s += &margin_lines(m),
             (None, LoopVerdict::Unstable) => s += "    unstable: margins undefined\n",
             (None, _) => {}
         }
@@ -450,7 +638,7 @@ impl LinearReport {
             "{} pitch loop, Kp {} Ki {} Kd {}",
             self.model, g.kp, g.ki, g.kd
         );
-        let Some(r) = &self.pitch.response else {
+        let Some(r) = self.pitch.as_ref().and_then(|p| p.response.as_ref()) else {
             return Vec::new();
         };
         [
@@ -475,9 +663,11 @@ impl LinearReport {
     /// A readable summary.
     pub fn summary(&self) -> String {
         let mut s = format!(
-            "linear analysis of {} ({}), residual {:.1e}{}\n",
+            "linear analysis of {} ({}){}, residual {:.1e}{}\n",
             self.model,
             self.params,
+            self.speed
+                .map_or(String::new(), |v| format!(" at its steady motion, {v} m/s")),
             self.residual,
             if self.equilibrium {
                 ""
@@ -486,35 +676,28 @@ impl LinearReport {
             }
         );
         s += "  open-loop modes:\n";
-        // Repeated eigenvalues share one eigenspace: print each group once with its multiplicity.
-        let mut i = 0;
-        while i < self.open_loop.len() {
-            let m = &self.open_loop[i];
-            let same = self.open_loop[i..]
-                .iter()
-                .take_while(|n| n.kind == m.kind && n.states == m.states)
-                .count();
-            let value = if same > 1 {
-                format!("{} (×{same})", complex(&m.eigenvalue))
-            } else {
-                complex(&m.eigenvalue)
-            };
-            s += &format!("    {value:<28} {:?} ({})\n", m.kind, m.states.join(", "));
-            i += same;
-        }
+        s += &mode_lines(&self.open_loop);
         let g = &self.gains;
-        s += &format!(
-            "  pitch loop Kp = {}, Ki = {}, Kd = {}: {}\n",
-            g.kp,
-            g.ki,
-            g.kd,
-            match self.pitch.verdict {
-                LoopVerdict::Stable => "stable",
-                LoopVerdict::Unstable => "UNSTABLE",
-                LoopVerdict::NoLoop => "NO LOOP",
+        match &self.pitch {
+            Some(pitch) => {
+                s += &format!(
+                    "  pitch loop Kp = {}, Ki = {}, Kd = {}: {}\n",
+                    g.kp,
+                    g.ki,
+                    g.kd,
+                    match pitch.verdict {
+                        LoopVerdict::Stable => "stable",
+                        LoopVerdict::Unstable => "UNSTABLE",
+                        LoopVerdict::NoLoop => "NO LOOP",
+                    }
+                );
+                s += &pitch.summary();
             }
-        );
-        s += &self.pitch.summary();
+            None => s += "  pitch loop: none (the model has no pitch states phi, w_y)\n",
+        }
+        if let Some(st) = &self.steer {
+            s += &st.summary();
+        }
         match (&self.lqr, &self.lqr_note) {
             (Some(l), _) => {
                 s += &format!(

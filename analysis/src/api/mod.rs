@@ -44,8 +44,8 @@ pub use codegen::{camel, generate, CodegenSettings};
 pub use eval::{evaluate, evaluate_batch, Batch, EvalResult, EvalSettings, Quantity};
 pub use linear::{
     analyse, complex, equilibrium_tolerance, pitch_loop, At, LinearReport, LinearSettings,
-    LoopVerdict, PhaseMargin, PitchReport, StableMargins, FIGURE_FREQUENCY_POINTS, LQR_STATES,
-    MAX_FREQUENCY_POINTS,
+    LoopVerdict, PhaseMargin, PitchReport, StableMargins, SteerReport, FIGURE_FREQUENCY_POINTS,
+    LQR_STATES, MAX_FREQUENCY_POINTS,
 };
 pub use loop_figures::{bode, nyquist, NYQUIST_CLIP};
 pub use phase::{portraits, Drive, PhaseResult, PhaseRun, PhaseSettings, Portrait, DEFAULT_TILTS};
@@ -56,8 +56,8 @@ pub use simulate::{
 };
 pub use spectrum::{drift_states, spectrum, SpectrumResult, SpectrumSettings, Timing};
 pub use steady::{
-    modal_plant, steady_motion, steady_state, Crossing, ModalPlant, SpeedPoint, StableRange,
-    SteadyResult, SteadySettings, SteadyVerdict, MAX_SPEEDS,
+    check_speed, modal_plant, steady_motion, steady_state, Crossing, ModalPlant, SpeedPoint,
+    StableRange, SteadyResult, SteadySettings, SteadyVerdict, MAX_SPEEDS,
 };
 pub use steer::{
     steer, steer_loop, SteerLoopSettings, SteerPoint, SteerResult, SteerVerdict, SteeredRide,

@@ -1,16 +1,20 @@
 //! Phase portraits (Φ, Φ̇): closed loop for several gain sets side by side (the study's
-//! Fig. 4 a–d), or open loop under constant inputs: `twv phase`.
+//! Fig. 4 a–d), or open loop under constant inputs; for a two-wheeler with a steer input the
+//! lean (φ, φ̇) under several steer laws from its steady motion: `twv phase`.
 
 use serde::Serialize;
 use twv_model::Model;
 
+use crate::control::steer::{SteerLaw, SteerSettings};
 use crate::control::{
     scenario, simulate, ControllerSettings, PidLoop, Plant, RunEnd, RunSettings, Trajectory,
 };
 use crate::error::{Error, Result};
-use crate::integrate::{OpenLoop, VectorField};
+use crate::integrate::{ClosedLoop, OpenLoop, VectorField};
 use crate::linear::eigenvalues;
-use crate::model::{dispatch_control, input_vector, state_vector, ControlTask, ResolvedModel};
+use crate::model::{
+    dispatch, dispatch_control, input_vector, state_vector, ControlTask, ModelTask, ResolvedModel,
+};
 use crate::output::Files;
 use crate::plot::{Curve, Figure, Grid, LineChart};
 use crate::progress::Progress;
@@ -23,6 +27,9 @@ pub enum Drive {
     Closed(ControllerSettings),
     /// Constant inputs, in the model's input order.
     Open(Vec<f64>),
+    /// A steer-torque law on lean, steer and their rates (a two-wheeler with a steer input,
+    /// from its steady motion at [`PhaseSettings::speed`]).
+    Steer(SteerSettings),
 }
 
 /// The portraits to draw.
@@ -34,7 +41,12 @@ pub struct PhaseSettings {
     /// Initial model states; `None`: at rest with Φ = each of `tilts`.
     pub x0: Option<Vec<Vec<f64>>>,
     /// Initial pitch angles from rest when `x0` is `None` [rad]. Default 0.1, −0.1, 0.2, −0.2.
+    /// With a `speed`: initial leans from the steady motion.
     pub tilts: Vec<f64>,
+    /// Start from the model's steady motion at this speed [m/s], leaning by each of `tilts`
+    /// (models whose IR describes one: the bicycle); the portraits are then of the lean
+    /// (φ, φ̇). Needed by steer laws.
+    pub speed: Option<f64>,
     /// Length, sampling and integrator of each run. Default 10 s.
     pub run: RunSettings,
 }
@@ -53,6 +65,7 @@ impl Default for PhaseSettings {
                 .collect(),
             x0: None,
             tilts: DEFAULT_TILTS.to_vec(),
+            speed: None,
             run: RunSettings::default(),
         }
     }
@@ -72,10 +85,14 @@ pub struct Portrait {
     /// The constant input of an open-loop portrait.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub input: Option<Vec<f64>>,
-    /// Largest real part of the non-zero eigenvalues at the upright (the zero ones are the
-    /// drift modes no pitch loop moves) [1/s]; `None` when every eigenvalue is zero.
+    /// The steer law of a steered portrait.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steer: Option<SteerSettings>,
+    /// Largest real part of the non-zero eigenvalues at the upright, or at the steady motion
+    /// (the zero ones are the drift modes no loop moves) [1/s]; `None` when every eigenvalue is
+    /// zero.
     pub loop_abscissa: Option<f64>,
-    /// Whether the linearised loop at the upright is stable (`loop_abscissa` < 0).
+    /// Whether the linearised loop there is stable (`loop_abscissa` < 0).
     pub stable: bool,
     /// The trajectories.
     pub runs: Vec<PhaseRun>,
@@ -109,6 +126,11 @@ pub struct PhaseResult {
     pub model: String,
     /// Where the parameters came from.
     pub params: String,
+    /// The steady motion's speed the runs started from [m/s] (`None`: from rest).
+    pub speed: Option<f64>,
+    /// The plotted state and its rate (`phi` and `w_y`, the pitch; the lean `phi` and `w_phi`
+    /// from a steady motion).
+    pub plane: [String; 2],
     /// The run settings.
     pub run: RunSettings,
     /// The portraits.
@@ -148,6 +170,14 @@ fn runs<F: VectorField<N>, const N: usize>(
         .collect()
 }
 
+/// The initial states as the model's state arrays (the error names `x0`).
+fn start_states<const NX: usize>(starts: &[Vec<f64>], states: &[&str]) -> Result<Vec<[f64; NX]>> {
+    starts
+        .iter()
+        .map(|x| state_vector("x0", x, states))
+        .collect()
+}
+
 /// Largest real part of the eigenvalues of J at `x` that are not zero (drift modes); `None`
 /// when all are zero.
 fn loop_abscissa<F: VectorField<N>, const N: usize>(
@@ -172,6 +202,58 @@ type Drawn = (
     Vec<PhaseRun>,
 );
 
+/// A steered portrait: the steer law closing the model, runs from `starts`, the loop's
+/// abscissa at the steady motion `steady`, the lean plane `plane` (state indices).
+struct SteerPhase<'a> {
+    progress: &'a dyn Progress,
+    law: &'a SteerSettings,
+    starts: &'a [Vec<f64>],
+    steady: &'a [f64],
+    plane: (usize, usize),
+    run: &'a RunSettings,
+}
+
+impl ModelTask for SteerPhase<'_> {
+    type Output = (Option<f64>, Vec<PhaseRun>);
+    fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
+        self,
+        model: &M,
+        resolved: &ResolvedModel,
+    ) -> Result<Self::Output> {
+        let info = model.info();
+        let starts = start_states::<NX>(self.starts, info.states)?;
+        let steady: [f64; NX] = state_vector("speed", self.steady, info.states)?;
+        let law =
+            SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, self.law, [0.0; NU])?;
+        let field = ClosedLoop::new(model, law);
+        let abscissa = loop_abscissa(&field, &steady)?;
+        Ok((
+            abscissa,
+            runs(field, &starts, self.plane, self.run, self.progress)?,
+        ))
+    }
+}
+
+/// The lean and lean-rate states of `model`'s steady motion (its first and third modes).
+fn lean_plane(model: &ResolvedModel) -> Result<(usize, usize)> {
+    let modes = model
+        .ir
+        .mechanics()
+        .and_then(|m| m.steady_motion.as_ref())
+        .map(|m| m.modes.clone())
+        .unwrap_or_default();
+    let index = |k: usize| {
+        modes
+            .get(k)
+            .and_then(|name| model.state_index(name))
+            .ok_or_else(|| Error::Unsupported {
+                model: model.name().to_string(),
+                reason: "its IR names no lean-and-steer modes of a steady motion".into(),
+            })
+    };
+    Ok((index(0)?, index(2)?))
+}
+
 impl ControlTask for PhaseTask<'_> {
     type Output = Drawn;
     fn run<const NX: usize, const NU: usize, const NA: usize, M: Model<NX, NU>>(
@@ -180,11 +262,7 @@ impl ControlTask for PhaseTask<'_> {
         resolved: &ResolvedModel,
     ) -> Result<Drawn> {
         let info = model.info();
-        let starts: Vec<[f64; NX]> = self
-            .starts
-            .iter()
-            .map(|x| state_vector("x0", x, info.states))
-            .collect::<Result<_>>()?;
+        let starts = start_states::<NX>(self.starts, info.states)?;
         let p: Plant<NU> = Plant::from_info(&info, &|n| resolved.param(n))?;
         let index = (p.measured.phi, p.measured.w_y);
         match self.drive {
@@ -195,6 +273,10 @@ impl ControlTask for PhaseTask<'_> {
                 let runs = runs(field, &aug, index, self.run, self.progress)?;
                 Ok((Some(settings.clone()), None, abscissa, runs))
             }
+            Drive::Steer(_) => Err(Error::input(
+                "steer_gains",
+                "a steer law runs from a steady motion: give its speed too",
+            )),
             Drive::Open(u) => {
                 let u: [f64; NU] = input_vector("force", u, info.inputs)?;
                 let field = OpenLoop::new(model, u);
@@ -216,11 +298,36 @@ pub fn portraits(
     if settings.portraits.is_empty() {
         return Err(Error::input("portraits", "no gain sets or input sets"));
     }
-    let starts: Vec<Vec<f64>> = match &settings.x0 {
-        Some(x) if x.is_empty() => return Err(Error::input("x0", "no initial states")),
-        Some(x) => x.clone(),
-        None if settings.tilts.is_empty() => return Err(Error::input("tilts", "no initial tilts")),
-        None => settings
+    if let Some(v) = settings.speed {
+        super::check_speed(v)?;
+        if settings.x0.is_some() {
+            return Err(Error::input(
+                "speed",
+                "give either initial states (x0) or a speed, not both",
+            ));
+        }
+    }
+    let steady = settings
+        .speed
+        .map(|v| super::steady_state(model, v))
+        .transpose()?;
+    let lean = steady.as_ref().map(|_| lean_plane(model)).transpose()?;
+    let starts: Vec<Vec<f64>> = match (&settings.x0, &steady, lean) {
+        (Some(x), _, _) if x.is_empty() => return Err(Error::input("x0", "no initial states")),
+        (Some(x), _, _) => x.clone(),
+        (None, _, _) if settings.tilts.is_empty() => {
+            return Err(Error::input("tilts", "no initial tilts"))
+        }
+        (None, Some(x), Some((phi, _))) => settings
+            .tilts
+            .iter()
+            .map(|&p| {
+                let mut x = x.clone();
+                x[phi] = p;
+                x
+            })
+            .collect(),
+        (None, _, _) => settings
             .tilts
             .iter()
             .map(|&p| model.rest_with("phi", p))
@@ -234,26 +341,61 @@ pub fn portraits(
                 s.n_states()
             }
             Drive::Open(_) => 0,
+            Drive::Steer(law) => {
+                law.validate()?;
+                0
+            }
         };
-        let task = PhaseTask {
-            progress,
-            drive,
-            starts: &starts,
-            run: &settings.run,
+        let (controller, input, steer, loop_abscissa, runs) = match (drive, &steady, lean) {
+            (Drive::Steer(law), Some(steady), Some(plane)) => {
+                let task = SteerPhase {
+                    progress,
+                    law,
+                    starts: &starts,
+                    steady,
+                    plane,
+                    run: &settings.run,
+                };
+                let (abscissa, runs) = dispatch(model, task)?;
+                (None, None, Some(*law), abscissa, runs)
+            }
+            (Drive::Steer(_), _, _) => {
+                return Err(Error::input(
+                    "steer_gains",
+                    "a steer law runs from a steady motion: give its speed too",
+                ))
+            }
+            _ => {
+                let task = PhaseTask {
+                    progress,
+                    drive,
+                    starts: &starts,
+                    run: &settings.run,
+                };
+                let (c, u, a, r) = dispatch_control(model, nz, task)?;
+                (c, u, None, a, r)
+            }
         };
-        let (controller, input, loop_abscissa, runs) = dispatch_control(model, nz, task)?;
         out.push(Portrait {
             label: label.clone(),
             controller,
             input,
+            steer,
             stable: loop_abscissa.is_some_and(|a| a < 0.0),
             loop_abscissa,
             runs,
         });
     }
+    let states = model.states();
+    let plane = match lean {
+        Some((phi, rate)) => [states[phi].to_string(), states[rate].to_string()],
+        None => ["phi".to_string(), "w_y".to_string()],
+    };
     Ok(PhaseResult {
         model: model.name().to_string(),
         params: model.params_origin.clone(),
+        speed: settings.speed,
+        plane,
         run: settings.run,
         portraits: out,
     })
@@ -263,8 +405,29 @@ pub fn portraits(
 pub const PORTRAIT_SIZE: (u32, u32) = (560, 480);
 
 impl PhaseResult {
+    /// The plotted angle: the pitch Φ, or the lean φ of a steady motion.
+    fn symbol(&self) -> &'static str {
+        match self.speed {
+            Some(_) => "φ",
+            None => "Φ",
+        }
+    }
+
+    /// The axes' titles.
+    fn axes(&self) -> (String, String) {
+        let sym = self.symbol();
+        match self.speed {
+            Some(v) => (
+                format!("lean {sym} [rad] at {v} m/s"),
+                format!("d{sym}/dt [rad/s]"),
+            ),
+            None => (format!("{sym} [rad]"), format!("d{sym}/dt [rad/s]")),
+        }
+    }
+
     /// One chart per portrait.
     pub fn portrait_figures(&self) -> Vec<LineChart> {
+        let (x, y) = self.axes();
         self.portraits
             .iter()
             .map(|p| {
@@ -272,11 +435,11 @@ impl PhaseResult {
                     .runs
                     .iter()
                     .map(|r| Curve {
-                        name: format!("Φ0 = {:.3}", r.phi0),
+                        name: format!("{}0 = {:.3}", self.symbol(), r.phi0),
                         points: r.points.clone(),
                     })
                     .collect();
-                LineChart::new(&p.label, "Φ [rad]", "dΦ/dt [rad/s]", PORTRAIT_SIZE, curves)
+                LineChart::new(&p.label, &x, &y, PORTRAIT_SIZE, curves)
             })
             .collect()
     }
@@ -317,9 +480,15 @@ impl PhaseResult {
 
     /// One line per portrait and per run.
     pub fn summary(&self) -> String {
+        let sym = self.symbol();
         let mut s = format!(
-            "Phase portraits (Φ, Φ̇) of {} ({}), {} s\n",
-            self.model, self.params, self.run.t_end
+            "Phase portraits ({sym}, {sym}̇) of {} ({}){}, {} s\n",
+            self.model,
+            self.params,
+            self.speed.map_or(String::new(), |v| format!(
+                " from its steady motion at {v} m/s"
+            )),
+            self.run.t_end
         );
         for p in &self.portraits {
             s += &match p.loop_abscissa {
@@ -328,17 +497,17 @@ impl PhaseResult {
                     p.label,
                     if p.stable { "stable" } else { "unstable" }
                 ),
-                None => format!("{}: every eigenvalue at the upright is zero\n", p.label),
+                None => format!("{}: every eigenvalue there is zero\n", p.label),
             };
             for r in &p.runs {
                 let end = match r.end {
                     RunEnd::Completed => format!(
-                        "ends at (Φ, Φ̇) = ({:+.3e}, {:+.3e})",
+                        "ends at ({sym}, {sym}̇) = ({:+.3e}, {:+.3e})",
                         r.final_phi, r.final_phi_dot
                     ),
                     RunEnd::Fell { t, .. } => format!("falls over at t = {t:.3} s"),
                 };
-                s += &format!("  Φ0 = {:+.3}: {end}\n", r.phi0);
+                s += &format!("  {sym}0 = {:+.3}: {end}\n", r.phi0);
             }
         }
         s

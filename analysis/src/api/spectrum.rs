@@ -100,12 +100,7 @@ impl SpectrumSettings {
             return Err(Error::input("exponents", "need at least one exponent"));
         }
         if let Some(v) = self.speed {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::input(
-                    "speed",
-                    format!("{v}: straight running forward needs a finite speed ≥ 0"),
-                ));
-            }
+            super::check_speed(v)?;
             if !self.x0.is_empty() {
                 return Err(Error::input(
                     "speed",

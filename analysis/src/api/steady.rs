@@ -184,6 +184,19 @@ struct Motion<'a> {
     mode_names: Vec<String>,
 }
 
+/// Checks one steady motion's speed (`--speed` of lyapunov, linearize, phase): straight running
+/// forward needs a finite speed ≥ 0.
+pub fn check_speed(v: f64) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::input(
+            "speed",
+            format!("{v}: straight running forward needs a finite speed ≥ 0"),
+        ))
+    }
+}
+
 /// The state of the model's steady motion at `speed` (the bicycle: upright, straight, the rear
 /// wheel turning at speed / r_R), for a model whose IR describes one.
 pub fn steady_state(model: &ResolvedModel, speed: f64) -> Result<Vec<f64>> {

@@ -41,7 +41,7 @@ pub use error::ControlError;
 pub use field::{Command, Layout, LoopLanes, PidLoop};
 pub use loop_states::loop_states;
 pub use metrics::{response_metrics, LoopMetrics, ResponseMetrics};
-pub use plant::{InputMap, Measured, Plant};
+pub use plant::{InputMap, Measured, Plant, PITCH_STATES};
 pub use record::{loop_metrics, run_closed_loop, ClosedLoopRun};
 pub use reference::Profile;
 pub use settings::{

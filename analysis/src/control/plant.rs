@@ -49,6 +49,10 @@ fn ser_opt_array<S: serde::Serializer, const N: usize>(
     a.as_ref().map(|a| a.as_slice()).serialize(s)
 }
 
+/// The states a pitch loop measures: the pitch angle Φ and the pitch rate w_y (a model without
+/// them has no pitch to control).
+pub const PITCH_STATES: [&str; 2] = ["phi", "w_y"];
+
 /// A model as the controller sees it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Plant<const NU: usize> {
@@ -75,9 +79,10 @@ impl<const NU: usize> Plant<NU> {
                 states: info.states.join(", "),
             })
         };
+        let [phi, w_y] = PITCH_STATES;
         let measured = Measured {
-            phi: need("phi")?,
-            w_y: need("w_y")?,
+            phi: need(phi)?,
+            w_y: need(w_y)?,
             v_x: find("v_x"),
             w_z: find("w_z"),
         };

@@ -1,10 +1,11 @@
-//! `linearize`: A, B from the generated Jacobians at an equilibrium, the modes, the pitch
-//! loop's closed-loop poles and (for a stable loop) its margins, and an LQR for comparison.
+//! `linearize`: A, B from the generated Jacobians at an equilibrium or a steady motion, the
+//! modes, the pitch loop's closed-loop poles and (for a stable loop) its margins, an LQR for
+//! comparison, and a steer law's poles and margins at the steer torque.
 
 use serde_json::{json, Value};
 
-use super::groups::{gains, gains_field};
-use super::options::{as_vector, field, flag, integer, number, sub, Kind, Opt};
+use super::groups::{gains, gains_field, steer};
+use super::options::{as_vector, field, flag, integer, number, optional_number, sub, Kind, Opt};
 use super::{Budget, Job, JobOutput, Verdict};
 use crate::api::{analyse, At, LinearReport, LinearSettings, LoopVerdict};
 use crate::error::Result;
@@ -21,8 +22,8 @@ impl Job for Linearize {
     const FILES: &'static str =
         "linear.json with the pitch loop's frequency response, bode.svg/.png and nyquist.svg/.png";
     const SUMMARY: &'static str =
-        "Linearisation at an equilibrium: modes, pitch-loop poles and margins (gain, phase, \
-         delay, disk), LQR";
+        "Linearisation at an equilibrium or a steady motion: modes, pitch-loop or steer-loop \
+         poles and margins (gain, phase, delay, disk), LQR";
     type Settings = LinearSettings;
     type Output = LinearReport;
 
@@ -49,12 +50,22 @@ impl Job for Linearize {
                     At::State(x) => json!(x),
                 },
             ),
+            optional_number(
+                "speed",
+                "m/s",
+                "Linearise about the model's steady motion at this speed instead of --at (models \
+                 whose IR describes one, e.g. whipple)",
+                field(|s: &mut LinearSettings| &mut s.speed),
+            )
+            .conflicts(&["at"]),
             flag(
                 "allow_non_equilibrium",
                 "Linearise at a point that is not an equilibrium (a frozen-time linearisation)",
                 field(|s: &mut LinearSettings| &mut s.allow_non_equilibrium),
             ),
         ];
+        // The steered bicycle: its steer loop's poles and margins at the steer torque.
+        opts.extend(steer(|s: &mut LinearSettings| &mut s.steer));
         opts.extend(gains(gains_field(|s: &mut LinearSettings| &mut s.gains)));
         let loop_options = field(|s: &mut LinearSettings| &mut s.loop_options);
         opts.push(
@@ -117,11 +128,22 @@ impl JobOutput for LinearReport {
     fn files(&self) -> Result<Files> {
         LinearReport::files(self)
     }
+    /// The steer loop's when one was closed, else the pitch loop's; a model with neither (the
+    /// unsteered bicycle, Lorenz) has nothing to judge.
     fn verdict(&self) -> Verdict {
-        match self.pitch.verdict {
-            LoopVerdict::Stable => Verdict::Done,
-            LoopVerdict::Unstable => Verdict::Negative("the pitch loop is unstable".into()),
-            LoopVerdict::NoLoop => {
+        if let Some(st) = &self.steer {
+            return match st.loop_poles.stable {
+                true => Verdict::Done,
+                false => Verdict::Negative(format!(
+                    "the steer loop is unstable (a pole at Re = {:.4} 1/s)",
+                    st.loop_poles.spectral_abscissa
+                )),
+            };
+        }
+        match self.pitch.as_ref().map(|p| p.verdict) {
+            Some(LoopVerdict::Stable) | None => Verdict::Done,
+            Some(LoopVerdict::Unstable) => Verdict::Negative("the pitch loop is unstable".into()),
+            Some(LoopVerdict::NoLoop) => {
                 Verdict::Negative("the force does not reach Φ: no pitch loop".into())
             }
         }

@@ -11,7 +11,7 @@
 //! // Typed: the settings type with its defaults, then the run.
 //! let settings = jobs::Linearize::defaults();
 //! let report = jobs::Linearize::run(&model, &settings, &twv_analysis::api::Silent)?;
-//! assert!(report.pitch.margins.is_some());
+//! assert!(report.pitch.as_ref().is_some_and(|p| p.margins.is_some()));
 //! // By name, with flat options as the command line and Python give them.
 //! let job = jobs::find("linear")?; // an alias of `linearize`
 //! let prepared = job.prepare_options(None, &[("kd".into(), "900".into())])?;

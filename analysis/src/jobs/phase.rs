@@ -5,13 +5,16 @@ use std::sync::Arc;
 
 use serde_json::{json, Value};
 
-use super::groups::{controller, gains_json, gains_value, run, Controllers};
-use super::options::{as_vector, as_vectors, field, Kind, Opt};
+use super::groups::{
+    controller, gains_json, gains_value, run, steer_gains_json, steer_gains_value, Controllers,
+};
+use super::options::{as_vector, as_vectors, field, optional_number, Kind, Opt};
 use super::{run_budget, Budget, Job, JobOutput};
 use crate::api::{portraits, Drive, PhaseResult, PhaseSettings};
+use crate::control::steer::SteerSettings;
 use crate::control::ControllerSettings;
 use crate::error::{Error, Result};
-use crate::linear::PidGains;
+use crate::linear::{PidGains, SteerGains};
 use crate::model::ResolvedModel;
 use crate::output::Files;
 use crate::progress::Progress;
@@ -44,6 +47,29 @@ fn gain_sets(v: &Value) -> Result<Vec<PidGains>> {
 }
 
 /// Every closed-loop portrait's controller.
+/// Steer gain sets: "k_phi=…,k_phi_dot=…;k_phi=…" or a list of named gains (each set's
+/// missing gains 0).
+fn steer_sets(v: &Value) -> Result<Vec<SteerGains>> {
+    let one = |g: &Value| steer_gains_value("steer_gains", g, SteerGains::default());
+    let sets: Vec<SteerGains> = match v {
+        Value::String(text) => text
+            .split(';')
+            .map(str::trim)
+            .filter(|p| !p.is_empty())
+            .map(|p| one(&Value::String(p.to_string())))
+            .collect::<Result<_>>()?,
+        Value::Array(items) => items.iter().map(one).collect::<Result<_>>()?,
+        other => vec![one(other)?],
+    };
+    if sets.is_empty() {
+        return Err(Error::input(
+            "steer_gains",
+            "no steer gain sets (use \"k_phi=…,k_phi_dot=…;k_phi=…\")",
+        ));
+    }
+    Ok(sets)
+}
+
 fn every_controller() -> Controllers<PhaseSettings> {
     Arc::new(|s, _, apply| {
         let mut any = false;
@@ -107,7 +133,7 @@ impl Job for Phase {
                         .iter()
                         .filter_map(|(_, d)| match d {
                             Drive::Closed(c) => Some(gains_json(&c.pitch.gains)),
-                            Drive::Open(_) => None,
+                            Drive::Open(_) | Drive::Steer(_) => None,
                         })
                         .collect::<Vec<_>>())
                 },
@@ -139,6 +165,55 @@ impl Job for Phase {
             )
             .conflicts(&["gains"]),
             Opt::new(
+                "steer_gains",
+                Kind::Text,
+                "N m/rad, N m s/rad",
+                "Steer laws instead, one portrait each, for a two-wheeler with a steer input \
+                 (whipple, with --speed): T_delta = k_phi φ + k_delta δ + k_phi_dot φ̇ + \
+                 k_delta_dot δ̇, \"k_phi=…,k_phi_dot=…;k_phi=…\" (a set's missing gains 0)",
+                |s: &mut PhaseSettings, v| {
+                    s.portraits = steer_sets(v)?
+                        .into_iter()
+                        .map(|g| {
+                            let label = format!(
+                                "k_phi {} k_delta {} k_phi_dot {} k_delta_dot {}",
+                                g.k_phi, g.k_delta, g.k_phi_dot, g.k_delta_dot
+                            );
+                            let law = SteerSettings {
+                                gains: g,
+                                saturation: None,
+                            };
+                            (label, Drive::Steer(law))
+                        })
+                        .collect();
+                    Ok(())
+                },
+                |s| {
+                    let sets: Vec<Value> = s
+                        .portraits
+                        .iter()
+                        .filter_map(|(_, d)| match d {
+                            Drive::Steer(law) => Some(steer_gains_json(&law.gains)),
+                            _ => None,
+                        })
+                        .collect();
+                    if sets.is_empty() {
+                        Value::Null
+                    } else {
+                        json!(sets)
+                    }
+                },
+            )
+            .conflicts(&["gains", "force"]),
+            optional_number(
+                "speed",
+                "m/s",
+                "Start from the model's steady motion at this speed, leaning by each of --tilts \
+                 (models whose IR describes one, e.g. whipple); needed by --steer-gains",
+                field(|s: &mut PhaseSettings| &mut s.speed),
+            )
+            .conflicts(&["x0"]),
+            Opt::new(
                 "x0",
                 Kind::Text,
                 "SI, rad",
@@ -158,7 +233,8 @@ impl Job for Phase {
                 "tilts",
                 Kind::Vector,
                 "rad",
-                "Initial pitch angles from rest, one run each",
+                "Initial pitch angles from rest (leans from the steady motion with --speed), one \
+                 run each",
                 |s: &mut PhaseSettings, v| {
                     s.tilts = as_vector("tilts", v)?;
                     Ok(())
@@ -178,8 +254,10 @@ impl Job for Phase {
             crate::control::check_tilt("tilts", *t)?;
         }
         for (_, drive) in &s.portraits {
-            if let Drive::Closed(c) = drive {
-                c.validate()?;
+            match drive {
+                Drive::Closed(c) => c.validate()?,
+                Drive::Steer(law) => law.validate()?,
+                Drive::Open(_) => {}
             }
         }
         Ok(())

@@ -52,8 +52,24 @@ pub fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, LinearError> {
     }
     check_finite("matrix", a.iter())?;
     // A bounded iteration count: `Schur::new` would loop forever on pathological input.
-    let schur = Schur::try_new(a.clone(), f64::EPSILON, 10_000).ok_or(LinearError::Eigen)?;
-    let mut eig: Vec<Complex<f64>> = schur.complex_eigenvalues().iter().copied().collect();
+    let (schur, shift) = Schur::try_new(a.clone(), f64::EPSILON, 10_000)
+        .map(|s| (s, 0.0))
+        .or_else(|| {
+            // nalgebra deflates where a subdiagonal entry is small against its two diagonal
+            // neighbours, which a nilpotent block drives to zero together with it (the bicycle
+            // at rest: x and ψ fed by w_R, nothing restoring them), so such a block never
+            // deflates. Shifted by ‖A‖ no diagonal is small; every eigenvalue moves by exactly
+            // the shift and keeps the ε‖A‖ absolute accuracy of the unshifted iteration.
+            let shift = a.norm().max(1.0);
+            let shifted = a + DMatrix::identity(a.nrows(), a.ncols()) * shift;
+            Schur::try_new(shifted, f64::EPSILON, 10_000).map(|s| (s, shift))
+        })
+        .ok_or(LinearError::Eigen)?;
+    let mut eig: Vec<Complex<f64>> = schur
+        .complex_eigenvalues()
+        .iter()
+        .map(|e| e - shift)
+        .collect();
     eig.sort_by(|x, y| y.re.total_cmp(&x.re).then(y.im.total_cmp(&x.im)));
     Ok(eig)
 }

@@ -148,10 +148,14 @@ impl LineChart {
         DB: DrawingBackend,
         X: Ranged<ValueType = f64> + ValueFormatter<f64>,
     {
+        // About one x label per 64 px (at 1×): plotters' default of ten ran labels such as
+        // "-0.06-0.04" into each other on a narrow panel (a phase portrait beside its legend).
+        let width = ctx.plotting_area().dim_in_pixel().0 / k.max(1);
+        let x_labels = (width / 64).clamp(3, 10) as usize;
         let mut mesh = ctx.configure_mesh();
         if !self.log_x {
             // A logarithmic axis keeps its own labels (decades).
-            mesh.x_label_formatter(&tick);
+            mesh.x_label_formatter(&tick).x_labels(x_labels);
         }
         mesh.y_label_formatter(&tick)
             .x_desc(&self.x_label)

@@ -230,8 +230,15 @@ pub fn recovery_finding(sim: &SimResult) -> Finding {
 
 /// The study PD's linear pitch loop.
 pub fn linear_finding(l: &LinearReport) -> Finding {
-    let poles: Vec<String> = l.pitch.loop_poles.iter().map(complex).collect();
-    let (verdict, text) = match (l.pitch.verdict, &l.pitch.margins) {
+    let Some(pitch) = &l.pitch else {
+        return finding(
+            "linear pitch loop",
+            "no loop",
+            format!("{} has no pitch (states phi, w_y) to control.", l.model),
+        );
+    };
+    let poles: Vec<String> = pitch.loop_poles.iter().map(complex).collect();
+    let (verdict, text) = match (pitch.verdict, &pitch.margins) {
         (LoopVerdict::Stable, Some(m)) => (
             "stable",
             format!(

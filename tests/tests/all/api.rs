@@ -220,8 +220,9 @@ fn phase_portraits_name_the_stable_gain_sets() {
 fn linear_margins_exist_only_for_a_stable_loop() {
     let model = shipped("vehicle8");
     let up = analyse(&model, &LinearSettings::default()).unwrap();
-    assert_eq!(up.pitch.verdict, LoopVerdict::Stable);
-    let m = up.pitch.margins.as_ref().unwrap();
+    let pitch = up.pitch.as_ref().unwrap();
+    assert_eq!(pitch.verdict, LoopVerdict::Stable);
+    let m = pitch.margins.as_ref().unwrap();
     let mx_g = 123.0 * 9.81;
     assert!((m.gain_margin_lower - mx_g / STUDY_PD.kp).abs() < 1e-6);
     let hanging = analyse(
@@ -232,8 +233,9 @@ fn linear_margins_exist_only_for_a_stable_loop() {
         },
     )
     .unwrap();
-    assert_eq!(hanging.pitch.verdict, LoopVerdict::Unstable);
-    assert!(hanging.pitch.margins.is_none());
+    let pitch = hanging.pitch.as_ref().unwrap();
+    assert_eq!(pitch.verdict, LoopVerdict::Unstable);
+    assert!(pitch.margins.is_none());
     // Not an equilibrium: refused, unless asked for.
     let tilted = LinearSettings {
         at: At::State(vec![0.3, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),

@@ -312,3 +312,252 @@ fn the_steered_bicycles_lyapunov_spectrum_is_its_closed_loop_eigenvalues() {
         );
     }
 }
+
+/// `linearize --speed V --steer-gains …`: the steer loop closed about the steady motion. Its
+/// poles (the IR's steady-motion Jacobian) are the benchmark equations' with the feedback
+/// substituted (1e-10), and every state's closed loop (the compiled model's own 9 × 9
+/// Jacobian, a second path) has exactly those four poles besides the drift of position,
+/// heading and speed; the verdict and the margins follow the poles.
+#[test]
+fn linearize_closes_the_steer_loop_about_the_steady_motion() {
+    use twv_analysis::api::{analyse, LinearSettings};
+    use twv_analysis::jobs::{JobOutput, Verdict};
+    use twv_analysis::linear::ModeKind;
+    let model = bicycle();
+    for v in [0.5, 3.0, 6.0] {
+        for g in &GAINS {
+            let settings = LinearSettings {
+                speed: Some(v),
+                steer: Some(SteerSettings {
+                    gains: *g,
+                    saturation: None,
+                }),
+                ..LinearSettings::default()
+            };
+            let r = analyse(&model, &settings).unwrap();
+            assert!(
+                r.equilibrium && r.pitch.is_none(),
+                "{v} m/s: {}",
+                r.residual
+            );
+            let st = r.steer.as_ref().unwrap();
+            let ours = sorted(st.loop_poles.eigenvalues.clone());
+            let theirs = sorted(eigenvalues(&benchmark_closed_loop(v, g)).unwrap());
+            for (a, b) in ours.iter().zip(&theirs) {
+                assert!(
+                    (a - b).norm() <= 1e-10 * b.norm().max(1.0),
+                    "at {v} m/s with {g:?}: {a} against the benchmark's {b}"
+                );
+            }
+            let (poles, drift): (Vec<_>, Vec<_>) = st
+                .closed_loop
+                .iter()
+                .partition(|m| m.kind != ModeKind::Drift);
+            assert_eq!(poles.len(), 4, "{v} m/s: {:?}", st.closed_loop);
+            assert!(drift.iter().all(|m| m.eigenvalue.norm() < 1e-6));
+            for p in &ours {
+                assert!(
+                    poles
+                        .iter()
+                        .any(|m| (m.eigenvalue - p).norm() <= 1e-8 * p.norm().max(1.0)),
+                    "{v} m/s: the loop pole {p} is not a closed-loop mode of every state"
+                );
+            }
+            let stable = theirs.iter().all(|e| e.re < 0.0);
+            assert_eq!(st.loop_poles.stable, stable);
+            assert_eq!(st.margins.is_some(), stable);
+            match r.verdict() {
+                Verdict::Done => assert!(stable),
+                Verdict::Negative(why) => assert!(!stable && why.contains("steer loop"), "{why}"),
+            }
+        }
+    }
+    // The verdict flips with the poles: lean and lean-rate feedback too weak for 3 m/s.
+    let at = |gains: SteerGains| LinearSettings {
+        speed: Some(3.0),
+        steer: Some(SteerSettings {
+            gains,
+            saturation: None,
+        }),
+        ..LinearSettings::default()
+    };
+    let weak = analyse(
+        &model,
+        &at(SteerGains {
+            k_phi: 20.0,
+            k_phi_dot: 10.0,
+            ..SteerGains::default()
+        }),
+    )
+    .unwrap();
+    assert!(matches!(weak.verdict(), Verdict::Negative(_)));
+    assert!(matches!(
+        analyse(&model, &at(GAINS[0])).unwrap().verdict(),
+        Verdict::Done
+    ));
+}
+
+/// The bicycle at rest: x and ψ fed by the wheel speed with nothing restoring them make a
+/// nilpotent block, on which nalgebra's QR iteration alone never deflates (its test is
+/// relative to the diagonal); the modes are the benchmark's at v = 0 (±3.13, ±5.53 1/s) and
+/// drift, and the verdict has no loop to judge.
+#[test]
+fn linearize_finds_the_modes_of_the_bicycle_at_rest() {
+    use nalgebra::Schur;
+    use twv_analysis::api::{analyse, LinearSettings};
+    use twv_analysis::jobs::{JobOutput, Verdict};
+    use twv_analysis::linear::ModeKind;
+    let r = analyse(&bicycle(), &LinearSettings::default()).unwrap();
+    assert!(Schur::try_new(r.a.clone(), f64::EPSILON, 10_000).is_none());
+    let theirs = eigenvalues(&benchmark_closed_loop(0.0, &SteerGains::default())).unwrap();
+    let (modes, drift): (Vec<_>, Vec<_>) =
+        r.open_loop.iter().partition(|m| m.kind != ModeKind::Drift);
+    assert_eq!(modes.len(), 4, "{:?}", r.open_loop);
+    assert!(drift.iter().all(|m| m.eigenvalue.norm() < 1e-6));
+    for b in &theirs {
+        assert!(
+            modes
+                .iter()
+                .any(|m| (m.eigenvalue - b).norm() <= 1e-8 * b.norm()),
+            "the benchmark's {b} at rest is not a mode: {modes:?}"
+        );
+    }
+    assert!(r.pitch.is_none() && r.steer.is_none());
+    assert!(matches!(r.verdict(), Verdict::Done));
+}
+
+#[test]
+fn linearize_refuses_a_steer_law_without_its_steady_motion_in_one_line() {
+    use twv_analysis::api::{analyse, At, LinearSettings};
+    let law = Some(SteerSettings {
+        gains: GAINS[0],
+        saturation: None,
+    });
+    let error = |m: &ResolvedModel, s: LinearSettings| analyse(m, &s).unwrap_err().to_string();
+    let cases = [
+        (
+            LinearSettings {
+                steer: law,
+                ..LinearSettings::default()
+            },
+            "speed too",
+        ),
+        (
+            LinearSettings {
+                speed: Some(f64::NAN),
+                ..LinearSettings::default()
+            },
+            "speed",
+        ),
+        (
+            LinearSettings {
+                speed: Some(-2.0),
+                ..LinearSettings::default()
+            },
+            "≥ 0",
+        ),
+        (
+            LinearSettings {
+                speed: Some(3.0),
+                at: At::Hanging,
+                ..LinearSettings::default()
+            },
+            "not both",
+        ),
+    ];
+    for (s, needle) in cases {
+        let e = error(&bicycle(), s);
+        assert!(e.contains(needle) && !e.contains('\n'), "{e}");
+    }
+    let vehicle = ModelSpec::shipped("vehicle8").resolve().unwrap();
+    let e = error(
+        &vehicle,
+        LinearSettings {
+            speed: Some(3.0),
+            steer: law,
+            ..LinearSettings::default()
+        },
+    );
+    assert!(e.contains("steady motion") && !e.contains('\n'), "{e}");
+}
+
+/// `phase --speed 3 --steer-gains "…;…"`: lean portraits of the steered bicycle. Each run starts
+/// at the steady motion leaning by its tilt; each portrait's loop abscissa at the steady motion
+/// is the lean-and-steer loop's (the linear steer loop, a second path); a stable design's runs
+/// die out as fast as that abscissa says, a weak law's grow or fall — the verdict follows.
+#[test]
+fn the_steered_bicycles_phase_portraits_follow_its_steer_loop() {
+    use twv_analysis::api::{portraits, Drive, PhaseSettings};
+    use twv_analysis::control::{RunEnd, RunSettings};
+    let bike = bicycle();
+    let v = 3.0;
+    let weak = SteerGains {
+        k_phi: 20.0,
+        k_phi_dot: 10.0,
+        ..SteerGains::default()
+    };
+    let law = |gains| {
+        Drive::Steer(SteerSettings {
+            gains,
+            saturation: None,
+        })
+    };
+    let settings = PhaseSettings {
+        portraits: vec![("design".into(), law(GAINS[0])), ("weak".into(), law(weak))],
+        tilts: vec![0.02, -0.01],
+        speed: Some(v),
+        run: RunSettings {
+            t_end: 8.0,
+            ..RunSettings::default()
+        },
+        ..PhaseSettings::default()
+    };
+    let r = portraits(&bike, &settings, &Silent).unwrap();
+    assert_eq!(r.plane, ["phi".to_string(), "w_phi".to_string()]);
+    let steady = steady_state(&bike, v).unwrap();
+    let lp = steer_loop(&bike, v).unwrap();
+    let phi = bike.state_index("phi").unwrap();
+    for (p, g) in r.portraits.iter().zip([GAINS[0], weak]) {
+        let sigma = lp.closed_loop(&g).unwrap().spectral_abscissa;
+        let ours = p.loop_abscissa.unwrap();
+        assert!(
+            (ours - sigma).abs() <= 1e-8 * sigma.abs().max(1.0),
+            "{ours} against {sigma}"
+        );
+        assert_eq!(p.stable, sigma < 0.0);
+        for (run, tilt) in p.runs.iter().zip(&settings.tilts) {
+            let mut x0 = steady.clone();
+            x0[phi] = *tilt;
+            assert_eq!(run.x0, x0);
+            let peak = run.points.iter().fold(0.0_f64, |m, q| m.max(q.0.abs()));
+            if p.stable {
+                assert!(
+                    sigma * 8.0 < -2.0,
+                    "the design decays within the run: σ = {sigma}"
+                );
+                assert!(matches!(run.end, RunEnd::Completed));
+                assert!(run.final_phi.abs() < 0.05 * tilt.abs(), "{}", run.final_phi);
+            } else {
+                assert!(
+                    matches!(run.end, RunEnd::Fell { .. }) || peak > 5.0 * tilt.abs(),
+                    "the weak law's run stays within {peak}"
+                );
+            }
+        }
+    }
+    // Bad input, one line each: a law without a speed, a speed on a model without a steady
+    // motion, a law on a model without a steer input.
+    let without_speed = PhaseSettings {
+        speed: None,
+        ..settings.clone()
+    };
+    let e = portraits(&bike, &without_speed, &Silent)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("speed") && !e.contains('\n'), "{e}");
+    let vehicle = ModelSpec::shipped("vehicle8").resolve().unwrap();
+    let e = portraits(&vehicle, &settings, &Silent)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("steady motion") && !e.contains('\n'), "{e}");
+}

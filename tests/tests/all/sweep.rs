@@ -348,7 +348,7 @@ fn stable_map_values_are_the_loop_decay_rates() {
             },
         )
         .unwrap();
-        let sigma = lin.pitch.spectral_abscissa.unwrap();
+        let sigma = lin.pitch.unwrap().spectral_abscissa.unwrap();
         // The (Φ, Φ̇) block of the closed loop: Φ̈ row gets b·(Kp Φ + Kd Φ̇).
         let m = nalgebra::Matrix2::new(
             a[(phi, phi)] + b[(phi, 0)] * gains.kp,
