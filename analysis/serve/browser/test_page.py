@@ -339,3 +339,117 @@ def test_the_page_reads_well_on_a_phone_and_a_desktop(server, browser, size, tmp
     ARTEFACTS.mkdir(parents=True, exist_ok=True)
     browser.save_screenshot(str(ARTEFACTS / f"serve-page-{size}.png"))
     browser.set_window_size(1500, 2000)
+
+
+@pytest.fixture(scope="module")
+def bicycle_server():
+    """`twv serve --model whipple`: a model with a steer input, whose page is /bicycle."""
+    proc = subprocess.Popen(
+        [str(TWV), "serve", "--model", "whipple", "--port", "0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    line = proc.stdout.readline()
+    assert line.startswith("twv serve: http://127.0.0.1:"), line + proc.stderr.read()
+    yield line.split()[2]
+    proc.terminate()
+    proc.wait(timeout=10)
+
+
+def bicycle_state(driver) -> dict:
+    return driver.execute_script(
+        """
+        const t = window.twv;
+        return {
+          updates: t.updates, errors: t.errors, gains: t.gains, speed: t.speed,
+          path: location.pathname,
+          push: Number(document.getElementById('push').value),
+          t_end: Number(document.getElementById('t-end').value),
+          lean: t.charts['c-lean'].data.datasets[0].data.map(p => p.y),
+          verdict: document.getElementById('loop-verdict').dataset.verdict,
+          ride: document.getElementById('ride-verdict').dataset.verdict,
+        };
+        """
+    )
+
+
+def bicycle_against_cli(driver, tmp: Path) -> dict:
+    """The page's steer-loop verdict and margins are `twv linearize --speed --steer-gains`'s and
+    its plotted lean is `twv ride`'s, for the gains and speed the page shows."""
+    state = bicycle_state(driver)
+    assert not state["errors"], state["errors"]
+    g = state["gains"]
+    law = ",".join(
+        f"{k}={g[k]!r}" for k in ("k_phi", "k_delta", "k_phi_dot", "k_delta_dot")
+    )
+    common = (
+        "--model",
+        "whipple",
+        "--speed",
+        repr(state["speed"]),
+        "--steer-gains",
+        law,
+    )
+    out = twv("linearize", "--json", *common)
+    assert out.returncode in (0, 3), out.stderr
+    steer = json.loads(out.stdout)["steer"]
+    assert state["verdict"] == (
+        "stable" if steer["loop_poles"]["stable"] else "unstable"
+    )
+    m = steer["margins"]
+    if m is None:
+        assert driver.find_element("id", "disk").get_attribute("data-value") == ""
+    else:
+        assert shown(driver, "pm") == m["phase_margin"]["deg"]
+        assert shown(driver, "disk") == m["disk_alpha"]
+        assert shown(driver, "dm") == m["delay_margin"]
+    ride = twv(
+        "ride",
+        *common,
+        "--perturb",
+        f"w_phi={state['push']!r}",
+        "--t-end",
+        repr(state["t_end"]),
+        "--out",
+        str(tmp),
+    )
+    assert ride.returncode in (0, 3), ride.stderr
+    with open(tmp / "ride.csv", newline="") as f:
+        lean = [float(row["phi"]) for row in csv.DictReader(f)]
+    assert state["lean"] == lean, "the plotted lean is not the CLI's"
+    return state
+
+
+def test_the_bicycle_page_steers_as_the_cli_does(bicycle_server, browser, tmp_path):
+    """The vehicle's page sends a model with a steer input to /bicycle; there, lean-rate
+    feedback at 3 m/s balances the bicycle (a stable loop, the push recovered), and dragging the
+    k_φ̇ slider down to weak feedback makes the loop unstable — each time with the CLI's
+    numbers and the CLI's lean."""
+    browser.get(bicycle_server)
+    wait_for(browser, "return window.twv && window.twv.updates >= 1")
+    before = bicycle_against_cli(browser, tmp_path / "before")
+    assert before["path"] == "/bicycle"
+    assert before["gains"]["k_phi_dot"] == 15 and before["speed"] == 3
+    assert before["verdict"] == "stable" and before["ride"] == "recovered"
+    slider = browser.find_element("id", "k_phi_dot")
+    updates = before["updates"]
+    # A real pointer drag of the thumb to the left: k_φ̇ falls below what 3 m/s needs.
+    ActionChains(browser).click_and_hold(slider).move_by_offset(
+        -60, 0
+    ).release().perform()
+    wait_for(
+        browser,
+        f"return window.twv.updates > {updates} && window.twv.gains.k_phi_dot < 5",
+    )
+    time.sleep(0.5)
+    wait_for(
+        browser,
+        "return window.twv.gains.k_phi_dot == "
+        "Number(document.getElementById('k_phi_dot').value)",
+    )
+    after = bicycle_against_cli(browser, tmp_path / "after")
+    assert after["verdict"] == "unstable", after["gains"]
+    assert after["lean"] != before["lean"]
+    ARTEFACTS.mkdir(parents=True, exist_ok=True)
+    browser.save_screenshot(str(ARTEFACTS / "serve-bicycle.png"))

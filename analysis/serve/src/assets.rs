@@ -8,16 +8,31 @@ pub struct Asset {
     pub bytes: &'static [u8],
 }
 
-const FILES: [(&str, &str, &[u8]); 5] = [
+const FILES: [(&str, &str, &[u8]); 8] = [
     (
         "/",
         "text/html; charset=utf-8",
         include_bytes!("../page/index.html"),
     ),
     (
+        "/bicycle",
+        "text/html; charset=utf-8",
+        include_bytes!("../page/bicycle.html"),
+    ),
+    (
+        "/common.js",
+        "text/javascript; charset=utf-8",
+        include_bytes!("../page/common.js"),
+    ),
+    (
         "/app.js",
         "text/javascript; charset=utf-8",
         include_bytes!("../page/app.js"),
+    ),
+    (
+        "/bicycle.js",
+        "text/javascript; charset=utf-8",
+        include_bytes!("../page/bicycle.js"),
     ),
     (
         "/style.css",
@@ -36,9 +51,13 @@ const FILES: [(&str, &str, &[u8]); 5] = [
     ),
 ];
 
-/// The file served at `path` (`/index.html` is `/`).
+/// The file served at `path` (`/index.html` is `/`, `/bicycle.html` is `/bicycle`).
 pub fn get(path: &str) -> Option<Asset> {
-    let path = if path == "/index.html" { "/" } else { path };
+    let path = match path {
+        "/index.html" => "/",
+        "/bicycle.html" => "/bicycle",
+        other => other,
+    };
     FILES
         .iter()
         .find(|(p, _, _)| *p == path)
