@@ -9,7 +9,6 @@ use twv_model::{Model, ModelInfo};
 use crate::control::steer::SteerSettings;
 use crate::control::{Plant, PITCH_STATES};
 use crate::error::{Error, Result};
-use crate::linear::steer::STEER_INPUT;
 use crate::linear::{
     analyse_pitch, linearize, loop_response, lqr, modes, CareStatus, HiddenPart, Linearization,
     LoopOptions, LoopResponse, Lqr, Margins, Mode, OperatingPoint, PidGains, PitchLoop,
@@ -367,7 +366,7 @@ impl ModelTask for Linear<'_> {
         let (a, b_full) = lin.dynamic();
         let b = b_full.columns(0, info.inputs.len()).into_owned();
         let residual = match s.speed {
-            Some(_) => steady_residual(model, &lin.x0, &held_states(resolved)),
+            Some(_) => steady_residual(&lin.f, &lin.states, &held_states(resolved)),
             None => lin.residual,
         };
         let equilibrium = residual <= equilibrium_tolerance(&a, &lin.x0);
@@ -442,30 +441,19 @@ impl ModelTask for Linear<'_> {
 /// The states a steady motion holds constant: the modes its IR studies and its speed (the
 /// coordinates it advances, position and heading, are the others).
 fn held_states(model: &ResolvedModel) -> Vec<String> {
-    model
-        .ir
-        .mechanics()
-        .and_then(|m| m.steady_motion.as_ref())
-        .map_or_else(Vec::new, |m| {
-            let mut held = m.modes.clone();
-            held.push(m.speed_state.clone());
-            held
-        })
+    model.steady_motion().map_or_else(Vec::new, |m| {
+        let mut held = m.modes.clone();
+        held.push(m.speed_state.clone());
+        held
+    })
 }
 
-/// max |f(x0)| over the `held` states: zero at a steady motion, where those are at rest while
-/// the position and heading advance at a constant rate.
-fn steady_residual<const NX: usize, const NU: usize, M: Model<NX, NU>>(
-    model: &M,
-    x0: &[f64; NX],
-    held: &[String],
-) -> f64 {
-    let mut f = [0.0; NX];
-    model.f(x0, &[0.0; NU], &mut f);
-    let states = model.info().states;
+/// max |f| over the `held` states: zero at a steady motion, where those are at rest while the
+/// position and heading advance at a constant rate.
+fn steady_residual(f: &[f64], states: &[String], held: &[String]) -> f64 {
     f.iter()
         .zip(states)
-        .filter(|(_, n)| held.iter().any(|h| h == *n))
+        .filter(|(_, n)| held.contains(n))
         .fold(0.0_f64, |m, (v, _)| m.max(v.abs()))
 }
 
@@ -482,17 +470,15 @@ fn steer_report(
 ) -> Result<SteerReport> {
     let lp = super::steer_loop(resolved, speed)?;
     let analysis = lp.analyse(&law.gains)?;
-    let input = resolved
-        .inputs()
-        .iter()
-        .position(|n| *n == STEER_INPUT)
-        .expect("steer_loop found the steer input");
+    let input = super::steer_input(resolved)?;
     let mut closed = a.clone();
     for (mode, k) in lp.modes().iter().zip(law.gains.row()) {
-        let j = states
-            .iter()
-            .position(|n| n == mode)
-            .expect("steer_loop's modes are states");
+        let j = resolved
+            .state_index(mode)
+            .ok_or_else(|| Error::Unsupported {
+                model: resolved.name().to_string(),
+                reason: format!("steady-motion mode `{mode}` is not a state"),
+            })?;
         for i in 0..closed.nrows() {
             closed[(i, j)] += b[(i, input)] * k;
         }

@@ -60,7 +60,8 @@ pub use steady::{
     StableRange, SteadyResult, SteadySettings, SteadyVerdict, MAX_SPEEDS,
 };
 pub use steer::{
-    steer, steer_loop, SteerLoopSettings, SteerPoint, SteerResult, SteerVerdict, SteeredRide,
+    steer, steer_input, steer_loop, SteerLoopSettings, SteerPoint, SteerResult, SteerVerdict,
+    SteeredRide,
 };
 pub use steer_map::{
     steer_map, StabilisingRange, SteerMapResult, SteerMapSettings, SteerMapVerdict,

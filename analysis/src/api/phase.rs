@@ -237,9 +237,7 @@ impl ModelTask for SteerPhase<'_> {
 /// The lean and lean-rate states of `model`'s steady motion (its first and third modes).
 fn lean_plane(model: &ResolvedModel) -> Result<(usize, usize)> {
     let modes = model
-        .ir
-        .mechanics()
-        .and_then(|m| m.steady_motion.as_ref())
+        .steady_motion()
         .map(|m| m.modes.clone())
         .unwrap_or_default();
     let index = |k: usize| {

@@ -261,15 +261,12 @@ fn unsupported(ir: &Ir, reason: &str) -> Error {
 impl<'a> Motion<'a> {
     fn of(model: &'a ResolvedModel) -> Result<Self> {
         let ir = &model.ir;
-        let steady = ir
-            .mechanics()
-            .and_then(|m| m.steady_motion.as_ref())
-            .ok_or_else(|| {
-                unsupported(
-                    ir,
-                    "its IR describes no steady motion (mechanics.steady_motion)",
-                )
-            })?;
+        let steady = model.steady_motion().ok_or_else(|| {
+            unsupported(
+                ir,
+                "its IR describes no steady motion (mechanics.steady_motion)",
+            )
+        })?;
         let function = ir
             .function("steady")
             .ok_or_else(|| unsupported(ir, "its IR has no function `steady`"))?;

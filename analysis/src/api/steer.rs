@@ -16,7 +16,7 @@ use crate::control::steer::SteerSettings;
 use crate::control::RunSettings;
 use crate::error::{Error, Result};
 use crate::linear::modes::spectral_abscissa;
-use crate::linear::steer::{SteerGains, SteerLoop, STEER_INPUT};
+use crate::linear::steer::{SteerGains, SteerLoop};
 use crate::model::ResolvedModel;
 use crate::output::Files;
 use crate::plot::{Curve, Figure, LineChart};
@@ -248,20 +248,14 @@ fn steered_ride(
     }
 }
 
+/// The index of `model`'s steer-torque input, or why it has none.
+pub fn steer_input(model: &ResolvedModel) -> Result<usize> {
+    crate::control::steer::steer_input(model.name(), &model.inputs())
+}
+
 /// The steer loop of `model` at `speed`.
 pub fn steer_loop(model: &ResolvedModel, speed: f64) -> Result<SteerLoop> {
-    let input = model
-        .inputs()
-        .iter()
-        .position(|n| *n == STEER_INPUT)
-        .ok_or_else(|| Error::Unsupported {
-            model: model.name().to_string(),
-            reason: format!(
-                "no steer input to control: a steer controller needs an input named \
-                 {STEER_INPUT} (inputs: {})",
-                model.inputs().join(", ")
-            ),
-        })?;
+    let input = steer_input(model)?;
     let plant = modal_plant(model, speed)?;
     SteerLoop::new(speed, plant.modes, plant.a, &plant.b, input).map_err(|e| Error::Unsupported {
         model: model.name().to_string(),

@@ -39,6 +39,21 @@ impl SteerSettings {
     }
 }
 
+/// The index of the steer torque among `inputs` of `model`, or why it has none.
+pub fn steer_input(model: &str, inputs: &[&str]) -> Result<usize> {
+    inputs
+        .iter()
+        .position(|n| *n == STEER_INPUT)
+        .ok_or_else(|| Error::Unsupported {
+            model: model.to_string(),
+            reason: format!(
+                "no steer input to control: a steer controller needs an input named \
+                 {STEER_INPUT} (inputs: {})",
+                inputs.join(", ")
+            ),
+        })
+}
+
 /// The law on a model: where it reads (the four lean-and-steer states) and acts (`T_delta`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SteerLaw<const NX: usize, const NU: usize> {
@@ -69,16 +84,7 @@ impl<const NX: usize, const NU: usize> SteerLaw<NX, NU> {
             model: model.to_string(),
             reason,
         };
-        let input = inputs
-            .iter()
-            .position(|n| *n == STEER_INPUT)
-            .ok_or_else(|| {
-                unsupported(format!(
-                    "no steer input to control: a steer controller needs an input named \
-                 {STEER_INPUT} (inputs: {})",
-                    inputs.join(", ")
-                ))
-            })?;
+        let input = steer_input(model, inputs)?;
         if modes.len() != 4 {
             return Err(unsupported(format!(
                 "a steer controller needs the four lean-and-steer modes (lean, steer, their \
@@ -121,9 +127,7 @@ impl<const NX: usize, const NU: usize> SteerLaw<NX, NU> {
         base: [f64; NU],
     ) -> Result<Self> {
         let modes = resolved
-            .ir
-            .mechanics()
-            .and_then(|m| m.steady_motion.as_ref())
+            .steady_motion()
             .map_or_else(Vec::new, |m| m.modes.clone());
         Self::new(resolved.name(), states, inputs, &modes, settings, base)
     }

@@ -132,12 +132,13 @@ impl JobOutput for LinearReport {
     /// unsteered bicycle, Lorenz) has nothing to judge.
     fn verdict(&self) -> Verdict {
         if let Some(st) = &self.steer {
-            return match st.loop_poles.stable {
-                true => Verdict::Done,
-                false => Verdict::Negative(format!(
+            return if st.loop_poles.stable {
+                Verdict::Done
+            } else {
+                Verdict::Negative(format!(
                     "the steer loop is unstable (a pole at Re = {:.4} 1/s)",
                     st.loop_poles.spectral_abscissa
-                )),
+                ))
             };
         }
         match self.pitch.as_ref().map(|p| p.verdict) {

@@ -16,29 +16,44 @@ pub struct Steady;
 
 /// `LO:HI:STEP` as text, or `[lo, hi, step]`.
 pub(super) fn speeds(v: &Value) -> Result<(f64, f64, f64)> {
+    let [lo, hi, step] = speed_parts("speed", v, "LO:HI:STEP", "0:10:0.01")?;
+    Ok((lo, hi, step))
+}
+
+/// N speeds as text separated by `:` (`form`, e.g. `LO:HI`), or a list of N numbers; the
+/// errors name `field` and show `example`.
+pub(super) fn speed_parts<const N: usize>(
+    field: &str,
+    v: &Value,
+    form: &str,
+    example: &str,
+) -> Result<[f64; N]> {
     let parts = match v {
         Value::String(text) => text
             .split(':')
-            .map(|p| as_number("speed", &Value::String(p.to_string())))
+            .map(|p| as_number(field, &Value::String(p.to_string())))
             .collect::<Result<Vec<_>>>()?,
-        Value::Array(_) => as_vector("speed", v)?,
+        Value::Array(_) => as_vector(field, v)?,
         other => {
             return Err(Error::input(
-                "speed",
+                field,
                 format!(
-                    "wants LO:HI:STEP, not {}",
-                    as_text("speed", other).unwrap_or("that")
+                    "wants {form}, not {}",
+                    as_text(field, other).unwrap_or("that")
                 ),
             ))
         }
     };
-    let [lo, hi, step] = parts[..] else {
-        return Err(Error::input(
-            "speed",
-            "wants three numbers LO:HI:STEP [m/s], e.g. 0:10:0.01",
-        ));
-    };
-    Ok((lo, hi, step))
+    let count = ["no", "one", "two", "three"]
+        .get(N)
+        .copied()
+        .unwrap_or("more");
+    parts.try_into().map_err(|_| {
+        Error::input(
+            field,
+            format!("wants {count} numbers {form} [m/s], e.g. {example}"),
+        )
+    })
 }
 
 impl Job for Steady {

@@ -5,6 +5,7 @@ use serde_json::{json, Value};
 
 use super::groups::{steer_gains_json, steer_gains_value};
 use super::options::{as_integer, field, integer, is_none, number, Kind, Opt};
+use super::steady::speed_parts;
 use super::tune::spec_value;
 use super::{Budget, Job, JobOutput, Verdict};
 use crate::api::{uncertainty, UncertaintyResult, UncertaintySettings, UncertaintyVerdict};
@@ -55,7 +56,7 @@ impl Job for Uncertainty {
                 "m/s",
                 "The speeds LO:HI searched for the self-stable band nobody steering",
                 |s: &mut UncertaintySettings, v| {
-                    (s.lo, s.hi) = speed_range(v)?;
+                    [s.lo, s.hi] = speed_parts("speeds", v, "LO:HI", "0:10")?;
                     Ok(())
                 },
                 |s| json!(format!("{}:{}", s.lo, s.hi)),
@@ -135,32 +136,6 @@ impl Job for Uncertainty {
         p: &dyn Progress,
     ) -> Result<UncertaintyResult> {
         uncertainty(model, s, p)
-    }
-}
-
-/// `LO:HI` (or `[lo, hi]`) as two speeds.
-fn speed_range(v: &Value) -> Result<(f64, f64)> {
-    let bad = || {
-        Error::input(
-            "speeds",
-            format!("{v}: want LO:HI in m/s, e.g. 0:10 (or [lo, hi])"),
-        )
-    };
-    let parts: Vec<f64> = match v {
-        Value::String(t) => t
-            .split(':')
-            .map(|p| p.trim().parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| bad())?,
-        Value::Array(a) => a
-            .iter()
-            .map(|x| x.as_f64().ok_or_else(bad))
-            .collect::<Result<_>>()?,
-        _ => return Err(bad()),
-    };
-    match parts[..] {
-        [lo, hi] => Ok((lo, hi)),
-        _ => Err(bad()),
     }
 }
 

@@ -36,6 +36,8 @@ pub struct Linearization<const NX: usize, const NU: usize> {
     /// max |f(x0, u0)|: zero at an equilibrium; otherwise A, B describe a trajectory, not a
     /// rest point, and eigenvalues are only a local (frozen-time) indication.
     pub residual: f64,
+    /// f(x0, u0) itself (its largest entry is `residual`).
+    pub f: [f64; NX],
     /// State names, from the model's `info()`.
     pub states: Vec<String>,
     /// Input names, from the model's `info()`.
@@ -91,6 +93,7 @@ where
         x0,
         u0: *u0,
         residual,
+        f,
         states,
         inputs,
     })

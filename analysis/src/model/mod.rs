@@ -11,7 +11,7 @@ use std::sync::Arc;
 pub use dispatch::{dispatch, dispatch_control, ControlTask, ModelTask};
 pub use vector::{check_vector, input_vector, state_vector};
 
-use twv_ir::{Ir, NativeCode};
+use twv_ir::{Ir, NativeCode, SteadyMotion};
 
 use crate::error::{Error, Result};
 
@@ -325,6 +325,12 @@ impl ResolvedModel {
                 .to_string()
             })
             .collect()
+    }
+
+    /// The steady motion its IR describes (the bicycle's straight running: its speed state and
+    /// the lean-and-steer modes studied about it), if any.
+    pub fn steady_motion(&self) -> Option<&SteadyMotion> {
+        self.ir.mechanics().and_then(|m| m.steady_motion.as_ref())
     }
 
     /// Index of a state by name.
