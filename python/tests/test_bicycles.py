@@ -131,3 +131,49 @@ def test_the_steered_linearisation_is_python_controls_feedback_on_the_closed_for
     assert abs(m["phase_margin"]["frequency"] - wgc) < 1e-3 * wgc
     # python-control's stability margin is the Nyquist curve's distance to -1: 1 / peak |S|.
     assert abs(m["peak_sensitivity"] - 1 / sm) < 1e-3 * m["peak_sensitivity"], (m, sm)
+
+
+def test_the_rate_filtered_steer_loop_is_python_controls_feedback_with_the_filter():
+    """`twv.linearize(speed=, steer_gains=, steer_filter=tau)` on Browser at 3 m/s: the six
+    poles are python-control's `feedback` of the closed-form plant with a controller that reads
+    the rates through 1/(tau s + 1), and the classical phase margin is `stability_margins` of
+    that loop; the lag costs phase margin against the unfiltered law."""
+    control = pytest.importorskip("control")
+    model = twv.Model("whipple", params=FOLDER / "browser.toml")
+    gains = {"k_phi": 5.0, "k_delta": 0.0, "k_phi_dot": 15.0, "k_delta_dot": 0.0}
+    tau = 0.01
+    lin = twv.linearize(model, speed=3.0, steer_gains=gains, steer_filter=tau)
+    plain = twv.linearize(model, speed=3.0, steer_gains=gains)
+    st = lin.steer
+    bench = benchmark_matrices(read_parameters(FOLDER / "browser.toml"))
+    a = bench.state_matrix(3.0)
+    b = np.zeros((4, 1))
+    b[2:, 0] = np.linalg.inv(bench.M)[:, 1]
+    plant = control.ss(a, b, np.eye(4), np.zeros((4, 1)))
+    lag = control.ss(control.tf([1.0], [tau, 1.0]))
+    # The law as a sum of SISO channels (MIMO transfer functions need slycot): a block
+    # diagonal of (k_phi, k_delta, k_phi_dot lag, k_delta_dot lag) summed into one torque.
+    channels = control.append(
+        control.ss([], [], [], [[gains["k_phi"]]]),
+        control.ss([], [], [], [[gains["k_delta"]]]),
+        gains["k_phi_dot"] * lag,
+        gains["k_delta_dot"] * lag,
+    )
+    law = control.ss([], [], [], np.ones((1, 4))) * channels
+    closed = control.feedback(plant, law, sign=1)
+    theirs = np.sort_complex(control.poles(closed))
+    # k_delta_dot = 0 leaves one filter state unobserved: its pole (-1/tau) may or may not
+    # be in python-control's realisation; twv keeps it.
+    ours = np.sort_complex(np.asarray(st["poles"]))
+    missing = [p for p in ours if np.min(np.abs(theirs - p)) > 1e-6 * max(1.0, abs(p))]
+    assert len(ours) == 6 and len(missing) <= 1, (ours, theirs)
+    for p in missing:
+        assert abs(p - (-1.0 / tau)) < 1e-8 / tau, p
+    for p in theirs:
+        assert np.min(np.abs(ours - p)) < 1e-6 * max(1.0, abs(p)), (p, ours)
+    _, pm, _, _, wgc, _ = control.stability_margins(-law * plant)
+    m = st["margins"]
+    assert m is not None
+    assert abs(m["phase_margin"]["deg"] - pm) < 1e-3, (m, pm)
+    assert abs(m["phase_margin"]["frequency"] - wgc) < 1e-3 * wgc
+    assert m["phase_margin"]["deg"] < plain.steer["margins"]["phase_margin"]["deg"]

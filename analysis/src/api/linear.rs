@@ -9,9 +9,10 @@ use twv_model::{Model, ModelInfo};
 use crate::control::steer::SteerSettings;
 use crate::control::{Plant, PITCH_STATES};
 use crate::error::{Error, Result};
+use crate::linear::steer::steer_closed_loop;
 use crate::linear::{
     analyse_pitch, linearize, loop_response, lqr, modes, CareStatus, HiddenPart, Linearization,
-    LoopOptions, LoopResponse, Lqr, Margins, Mode, OperatingPoint, PidGains, PitchLoop,
+    LoopOptions, LoopResponse, Lqr, Margins, Mode, ModeKind, OperatingPoint, PidGains, PitchLoop,
     SteerClosedLoop,
 };
 use crate::model::{dispatch, state_vector, ModelTask, ResolvedModel};
@@ -468,27 +469,31 @@ fn steer_report(
     law: &SteerSettings,
     speed: f64,
 ) -> Result<SteerReport> {
-    let lp = super::steer_loop(resolved, speed)?;
+    let lp = super::steer_loop(resolved, speed)?.with_rate_filter(law.rate_filter)?;
     let analysis = lp.analyse(&law.gains)?;
     let input = super::steer_input(resolved)?;
-    let mut closed = a.clone();
-    for (mode, k) in lp.modes().iter().zip(law.gains.row()) {
-        let j = resolved
+    let mut at = [0; 4];
+    for (slot, mode) in at.iter_mut().zip(lp.modes()) {
+        *slot = resolved
             .state_index(mode)
             .ok_or_else(|| Error::Unsupported {
                 model: resolved.name().to_string(),
                 reason: format!("steady-motion mode `{mode}` is not a state"),
             })?;
-        for i in 0..closed.nrows() {
-            closed[(i, j)] += b[(i, input)] * k;
-        }
+    }
+    let b_steer: Vec<f64> = b.column(input).iter().copied().collect();
+    let closed = steer_closed_loop(a, &b_steer, at, &law.gains, law.rate_filter);
+    // The filter's states are named after the rates they filter.
+    let mut names = states.to_vec();
+    if law.rate_filter.is_some() {
+        names.extend(lp.modes()[2..].iter().map(|m| format!("{m}_f")));
     }
     Ok(SteerReport {
         law: *law,
         modes: lp.modes().to_vec(),
         margins: StableMargins::of(&analysis.margins),
         loop_poles: analysis.closed_loop,
-        closed_loop: modes(&closed, states)?,
+        closed_loop: modes(&closed, &names)?,
     })
 }
 
@@ -516,16 +521,24 @@ fn list(values: &[Complex<f64>]) -> String {
     values.iter().map(complex).collect::<Vec<_>>().join(", ")
 }
 
-/// One line per mode; repeated eigenvalues share one eigenspace, so each group is printed once
-/// with its multiplicity.
+/// One line per mode; a repeated eigenvalue (or a conjugate pair) shares one eigenspace, so
+/// each group is printed once with its multiplicity.
 fn mode_lines(modes: &[Mode]) -> String {
     let mut s = String::new();
     let mut i = 0;
     while i < modes.len() {
         let m = &modes[i];
+        let near =
+            |e: Complex<f64>| (e - m.eigenvalue).norm() <= 1e-9 * m.eigenvalue.norm().max(1.0);
         let same = modes[i..]
             .iter()
-            .take_while(|n| n.kind == m.kind && n.states == m.states)
+            .take_while(|n| {
+                n.kind == m.kind
+                    && n.states == m.states
+                    && (n.kind == ModeKind::Drift
+                        || near(n.eigenvalue)
+                        || near(n.eigenvalue.conj()))
+            })
             .count();
         let value = if same > 1 {
             format!("{} (×{same})", complex(&m.eigenvalue))
@@ -576,6 +589,9 @@ impl SteerReport {
                 "UNSTABLE"
             }
         );
+        if let Some(tau) = self.law.rate_filter {
+            s += &format!("    rates read through 1/({tau} s · s + 1)\n");
+        }
         s += &format!("    loop poles: {}\n", list(&self.loop_poles.eigenvalues));
         match &self.margins {
             Some(m) => s += &margin_lines(m),

@@ -3,9 +3,9 @@
 //! lean (φ, φ̇) under several steer laws from its steady motion: `twv phase`.
 
 use serde::Serialize;
-use twv_model::Model;
+use twv_model::{Model, ModelInfo};
 
-use crate::control::steer::{SteerLaw, SteerSettings};
+use crate::control::steer::{FilteredSteer, SteerLaw, SteerSettings};
 use crate::control::{
     scenario, simulate, ControllerSettings, PidLoop, Plant, RunEnd, RunSettings, Trajectory,
 };
@@ -13,7 +13,8 @@ use crate::error::{Error, Result};
 use crate::integrate::{ClosedLoop, OpenLoop, VectorField};
 use crate::linear::eigenvalues;
 use crate::model::{
-    dispatch, dispatch_control, input_vector, state_vector, ControlTask, ModelTask, ResolvedModel,
+    dispatch, dispatch_control, dispatch_steer_filtered, input_vector, state_vector, ControlTask,
+    ModelTask, ResolvedModel,
 };
 use crate::output::Files;
 use crate::plot::{Curve, Figure, Grid, LineChart};
@@ -47,6 +48,9 @@ pub struct PhaseSettings {
     /// (models whose IR describes one: the bicycle); the portraits are then of the lean
     /// (φ, φ̇). Needed by steer laws.
     pub speed: Option<f64>,
+    /// τ [s] of a rate filter for every steer law (1/(τs + 1) on the lean and steer rates);
+    /// `None` (default): each law's own (none unless set).
+    pub steer_filter: Option<f64>,
     /// Length, sampling and integrator of each run. Default 10 s.
     pub run: RunSettings,
 }
@@ -66,6 +70,7 @@ impl Default for PhaseSettings {
             x0: None,
             tilts: DEFAULT_TILTS.to_vec(),
             speed: None,
+            steer_filter: None,
             run: RunSettings::default(),
         }
     }
@@ -213,6 +218,21 @@ struct SteerPhase<'a> {
     run: &'a RunSettings,
 }
 
+impl SteerPhase<'_> {
+    /// The runs' starts, the steady motion and the law on a model.
+    fn parts<const NX: usize, const NU: usize>(
+        &self,
+        info: &ModelInfo,
+        resolved: &ResolvedModel,
+    ) -> Result<(Vec<[f64; NX]>, [f64; NX], SteerLaw<NX, NU>)> {
+        let starts = start_states::<NX>(self.starts, info.states)?;
+        let steady = state_vector("speed", self.steady, info.states)?;
+        let law =
+            SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, self.law, [0.0; NU])?;
+        Ok((starts, steady, law))
+    }
+}
+
 impl ModelTask for SteerPhase<'_> {
     type Output = (Option<f64>, Vec<PhaseRun>);
     fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
@@ -220,13 +240,30 @@ impl ModelTask for SteerPhase<'_> {
         model: &M,
         resolved: &ResolvedModel,
     ) -> Result<Self::Output> {
-        let info = model.info();
-        let starts = start_states::<NX>(self.starts, info.states)?;
-        let steady: [f64; NX] = state_vector("speed", self.steady, info.states)?;
-        let law =
-            SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, self.law, [0.0; NU])?;
+        let (starts, steady, law) = self.parts::<NX, NU>(&model.info(), resolved)?;
         let field = ClosedLoop::new(model, law);
         let abscissa = loop_abscissa(&field, &steady)?;
+        Ok((
+            abscissa,
+            runs(field, &starts, self.plane, self.run, self.progress)?,
+        ))
+    }
+}
+
+/// The same portrait with the law's rates filtered: on NA = NX + 2 states, each run (and the
+/// steady motion the abscissa is taken at) with the filter at its rates.
+impl ControlTask for SteerPhase<'_> {
+    type Output = (Option<f64>, Vec<PhaseRun>);
+    fn run<const NX: usize, const NU: usize, const NA: usize, M: Model<NX, NU>>(
+        self,
+        model: &M,
+        resolved: &ResolvedModel,
+    ) -> Result<Self::Output> {
+        let (starts, steady, law) = self.parts::<NX, NU>(&model.info(), resolved)?;
+        let tau = self.law.rate_filter.unwrap_or(f64::NAN);
+        let field = FilteredSteer::<_, NX, NU, NA>::new(model, law, tau)?;
+        let starts: Vec<[f64; NA]> = starts.iter().map(|x| field.initial_state(x)).collect();
+        let abscissa = loop_abscissa(&field, &field.initial_state(&steady))?;
         Ok((
             abscissa,
             runs(field, &starts, self.plane, self.run, self.progress)?,
@@ -296,6 +333,13 @@ pub fn portraits(
     if settings.portraits.is_empty() {
         return Err(Error::input("portraits", "no gain sets or input sets"));
     }
+    let steered = |(_, d): &(String, Drive)| matches!(d, Drive::Steer(_));
+    if settings.steer_filter.is_some() && !settings.portraits.iter().any(steered) {
+        return Err(Error::input(
+            "steer_filter",
+            "filters the rates of steer laws: give --steer-gains too",
+        ));
+    }
     if let Some(v) = settings.speed {
         super::check_speed(v)?;
         if settings.x0.is_some() {
@@ -346,16 +390,24 @@ pub fn portraits(
         };
         let (controller, input, steer, loop_abscissa, runs) = match (drive, &steady, lean) {
             (Drive::Steer(law), Some(steady), Some(plane)) => {
+                let law = SteerSettings {
+                    rate_filter: settings.steer_filter.or(law.rate_filter),
+                    ..*law
+                };
+                law.validate()?;
                 let task = SteerPhase {
                     progress,
-                    law,
+                    law: &law,
                     starts: &starts,
                     steady,
                     plane,
                     run: &settings.run,
                 };
-                let (abscissa, runs) = dispatch(model, task)?;
-                (None, None, Some(*law), abscissa, runs)
+                let (abscissa, runs) = match law.rate_filter {
+                    Some(_) => dispatch_steer_filtered(model, task)?,
+                    None => dispatch(model, task)?,
+                };
+                (None, None, Some(law), abscissa, runs)
             }
             (Drive::Steer(_), _, _) => {
                 return Err(Error::input(

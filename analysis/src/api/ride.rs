@@ -7,13 +7,16 @@
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
-use twv_model::Model;
+use twv_model::{Model, ModelInfo};
 
-use crate::control::steer::{SteerLaw, SteerSettings};
-use crate::control::{simulate as integrate, RunEnd, RunSettings};
+use crate::control::steer::{FilteredSteer, SteerLaw, SteerSettings};
+use crate::control::{simulate as integrate, RunEnd, RunSettings, Trajectory};
 use crate::error::{Error, Result};
 use crate::integrate::{ClosedLoop, OpenLoop};
-use crate::model::{dispatch, input_vector, state_vector, ModelTask, ResolvedModel};
+use crate::model::{
+    dispatch, dispatch_steer_filtered, input_vector, state_vector, ControlTask, ModelTask,
+    ResolvedModel,
+};
 use crate::output::Files;
 use crate::plot::{Curve, Figure, LineChart};
 use crate::progress::Progress;
@@ -183,6 +186,29 @@ fn initial_state(model: &ResolvedModel, s: &RideSettings) -> Result<Vec<f64>> {
 
 struct Ride<'a>(&'a RideSettings, &'a dyn Progress);
 
+/// What a run starts from on a model: the watched state's index, x0 and u.
+fn start<const NX: usize, const NU: usize>(
+    s: &RideSettings,
+    resolved: &ResolvedModel,
+    info: &ModelInfo,
+) -> Result<(usize, [f64; NX], [f64; NU])> {
+    let watch = resolved.state_index(&s.watch).ok_or_else(|| {
+        Error::input(
+            "watch",
+            format!(
+                "`{}` is not a state of {} (states: {})",
+                s.watch,
+                resolved.name(),
+                info.states.join(", ")
+            ),
+        )
+    })?;
+    let x0: [f64; NX] = state_vector("x0", &initial_state(resolved, s)?, info.states)?;
+    let u_given = s.u.clone().unwrap_or_else(|| vec![0.0; info.inputs.len()]);
+    let u: [f64; NU] = input_vector("u", &u_given, info.inputs)?;
+    Ok((watch, x0, u))
+}
+
 impl ModelTask for Ride<'_> {
     type Output = RideResult;
     fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
@@ -192,20 +218,7 @@ impl ModelTask for Ride<'_> {
     ) -> Result<RideResult> {
         let s = self.0;
         let info = model.info();
-        let watch = resolved.state_index(&s.watch).ok_or_else(|| {
-            Error::input(
-                "watch",
-                format!(
-                    "`{}` is not a state of {} (states: {})",
-                    s.watch,
-                    resolved.name(),
-                    info.states.join(", ")
-                ),
-            )
-        })?;
-        let x0: [f64; NX] = state_vector("x0", &initial_state(resolved, s)?, info.states)?;
-        let u_given = s.u.clone().unwrap_or_else(|| vec![0.0; info.inputs.len()]);
-        let u: [f64; NU] = input_vector("u", &u_given, info.inputs)?;
+        let (watch, x0, u) = start::<NX, NU>(s, resolved, &info)?;
         let traj = match &s.steer {
             None => integrate(OpenLoop::new(model, u), &x0, watch, &s.run, self.1)?,
             Some(settings) => {
@@ -214,34 +227,85 @@ impl ModelTask for Ride<'_> {
                 integrate(ClosedLoop::new(model, law), &x0, watch, &s.run, self.1)?
             }
         };
-        let watched = traj.component(watch);
-        let (verdict, peak, tail_peak) = ride_verdict(&traj.end, &watched);
-        let mut columns = vec!["t".to_string()];
-        columns.extend(info.states.iter().map(|n| n.to_string()));
-        let rows = traj
-            .t
-            .iter()
-            .zip(&traj.x)
-            .map(|(t, x)| std::iter::once(*t).chain(x.iter().copied()).collect())
-            .collect();
-        Ok(RideResult {
-            model: resolved.name().to_string(),
-            params: resolved.params_origin.clone(),
-            x0: x0.to_vec(),
-            u: u_given,
-            speed: s.speed,
-            steer: s.steer,
-            watch: s.watch.clone(),
-            run: s.run,
-            end: traj.end,
-            peak,
-            tail_peak,
-            final_value: watched.last().map_or(0.0, |v| v.abs()),
-            verdict,
-            units: resolved.column_units(&columns, &[]),
-            columns,
-            rows,
-        })
+        let states: Vec<String> = info.states.iter().map(|n| n.to_string()).collect();
+        Ok(result(s, resolved, &info, &x0, watch, traj, states))
+    }
+}
+
+/// A ride steered by a law with a rate filter: the closed loop on NA = NX + 2 states, whose
+/// filtered rates are two more columns.
+struct FilteredRide<'a>(&'a RideSettings, &'a dyn Progress, SteerSettings, f64);
+
+impl ControlTask for FilteredRide<'_> {
+    type Output = RideResult;
+    fn run<const NX: usize, const NU: usize, const NA: usize, M: Model<NX, NU>>(
+        self,
+        model: &M,
+        resolved: &ResolvedModel,
+    ) -> Result<RideResult> {
+        let (s, settings, tau) = (self.0, &self.2, self.3);
+        let info = model.info();
+        let (watch, x0, u) = start::<NX, NU>(s, resolved, &info)?;
+        let law = SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, settings, u)?;
+        let field = FilteredSteer::<_, NX, NU, NA>::new(model, law, tau)?;
+        let xa = field.initial_state(&x0);
+        let traj = integrate(field, &xa, watch, &s.run, self.1)?;
+        let mut states: Vec<String> = info.states.iter().map(|n| n.to_string()).collect();
+        states.extend(FilteredSteer::<M, NX, NU, NA>::filter_states(
+            info.states,
+            &law,
+        ));
+        Ok(result(s, resolved, &info, &x0, watch, traj, states))
+    }
+}
+
+/// The result of a run whose samples are `traj` over the states `states`.
+fn result<const N: usize>(
+    s: &RideSettings,
+    resolved: &ResolvedModel,
+    info: &ModelInfo,
+    x0: &[f64],
+    watch: usize,
+    traj: Trajectory<N>,
+    states: Vec<String>,
+) -> RideResult {
+    let watched = traj.component(watch);
+    let (verdict, peak, tail_peak) = ride_verdict(&traj.end, &watched);
+    let mut columns = vec!["t".to_string()];
+    columns.extend(states);
+    let rows = traj
+        .t
+        .iter()
+        .zip(&traj.x)
+        .map(|(t, x)| std::iter::once(*t).chain(x.iter().copied()).collect())
+        .collect();
+    let rate_unit = |name: &str| {
+        name.strip_suffix("_f")
+            .and_then(|rate| resolved.unit_of(rate))
+            .unwrap_or("")
+    };
+    let filtered: Vec<(&str, &str)> = columns
+        .iter()
+        .filter(|c| resolved.state_index(c).is_none())
+        .map(|c| (c.as_str(), rate_unit(c)))
+        .collect();
+    RideResult {
+        model: resolved.name().to_string(),
+        params: resolved.params_origin.clone(),
+        x0: x0.to_vec(),
+        u: s.u.clone().unwrap_or_else(|| vec![0.0; info.inputs.len()]),
+        speed: s.speed,
+        steer: s.steer,
+        watch: s.watch.clone(),
+        run: s.run,
+        end: traj.end,
+        peak,
+        tail_peak,
+        final_value: watched.last().map_or(0.0, |v| v.abs()),
+        verdict,
+        units: resolved.column_units(&columns, &filtered),
+        columns,
+        rows,
     }
 }
 
@@ -252,7 +316,15 @@ pub fn ride(
     progress: &dyn Progress,
 ) -> Result<RideResult> {
     settings.validate()?;
-    dispatch(model, Ride(settings, progress))
+    match settings.steer {
+        Some(
+            law @ SteerSettings {
+                rate_filter: Some(tau),
+                ..
+            },
+        ) => dispatch_steer_filtered(model, FilteredRide(settings, progress, law, tau)),
+        _ => dispatch(model, Ride(settings, progress)),
+    }
 }
 
 impl RideResult {

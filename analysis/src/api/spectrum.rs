@@ -3,16 +3,17 @@
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
-use twv_model::Model;
+use twv_model::{Model, ModelInfo};
 
 use super::steady::steady_state;
-use crate::control::steer::{SteerLaw, SteerSettings};
+use crate::control::steer::{FilteredSteer, SteerLaw, SteerSettings};
 use crate::control::{ControllerSettings, PidLoop, Plant};
 use crate::error::{Error, Result};
 use crate::integrate::{ClosedLoop, OpenLoop, VectorField};
 use crate::lyapunov::{lyapunov_spectrum_observed, LyapunovResult, LyapunovSettings};
 use crate::model::{
-    dispatch, dispatch_control, input_vector, state_vector, ControlTask, ModelTask, ResolvedModel,
+    dispatch, dispatch_control, dispatch_steer_filtered, input_vector, state_vector, ControlTask,
+    ModelTask, ResolvedModel,
 };
 use crate::output::Files;
 use crate::plot::{Curve, Figure, LineChart};
@@ -202,6 +203,19 @@ pub fn drift_states(model: &ResolvedModel) -> Vec<String> {
 
 struct Open<'a>(&'a SpectrumSettings, &'a dyn Progress);
 
+/// x0 and the constant inputs (0 unless given) of `s` on a model.
+fn start<const NX: usize, const NU: usize>(
+    s: &SpectrumSettings,
+    info: &ModelInfo,
+) -> Result<([f64; NX], [f64; NU])> {
+    let x0 = state_vector("x0", &s.x0, info.states)?;
+    let u = match &s.u {
+        Some(u) => input_vector("u", u, info.inputs)?,
+        None => [0.0; NU],
+    };
+    Ok((x0, u))
+}
+
 impl ModelTask for Open<'_> {
     type Output = (Vec<f64>, Vec<f64>, LyapunovResult, Option<Timing>);
     fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
@@ -210,11 +224,7 @@ impl ModelTask for Open<'_> {
         resolved: &ResolvedModel,
     ) -> Result<Self::Output> {
         let info = model.info();
-        let x0: [f64; NX] = state_vector("x0", &self.0.x0, info.states)?;
-        let u: [f64; NU] = match &self.0.u {
-            Some(u) => input_vector("u", u, info.inputs)?,
-            None => [0.0; NU],
-        };
+        let (x0, u) = start::<NX, NU>(self.0, &info)?;
         let (result, timing) = match &self.0.steer {
             None => timed(self.0, &OpenLoop::new(model, u), &x0, self.1)?,
             Some(settings) => {
@@ -249,6 +259,27 @@ impl ControlTask for Closed<'_> {
     }
 }
 
+/// The spectrum of the model steered by a law with a rate filter: on NA = NX + 2 states, from
+/// x0 and the filter at its rates.
+struct FilteredSteered<'a>(&'a SpectrumSettings, SteerSettings, f64, &'a dyn Progress);
+
+impl ControlTask for FilteredSteered<'_> {
+    type Output = (Vec<f64>, Vec<f64>, LyapunovResult, Option<Timing>);
+    fn run<const NX: usize, const NU: usize, const NA: usize, M: Model<NX, NU>>(
+        self,
+        model: &M,
+        resolved: &ResolvedModel,
+    ) -> Result<Self::Output> {
+        let info = model.info();
+        let (x0, u) = start::<NX, NU>(self.0, &info)?;
+        let law = SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, &self.1, u)?;
+        let field = FilteredSteer::<_, NX, NU, NA>::new(model, law, self.2)?;
+        let xa = field.initial_state(&x0);
+        let (result, timing) = timed(self.0, &field, &xa, self.3)?;
+        Ok((xa.to_vec(), u[..info.inputs.len()].to_vec(), result, timing))
+    }
+}
+
 /// The Lyapunov spectrum of `model` with `settings`.
 pub fn spectrum(
     model: &ResolvedModel,
@@ -275,12 +306,24 @@ pub fn spectrum(
         ));
     }
     let steered = settings.steer.is_some();
-    let ((x0, u, result, timing), name) = match &settings.controller {
-        Some(c) => (
+    let ((x0, u, result, timing), name) = match (&settings.controller, settings.steer) {
+        (Some(c), _) => (
             dispatch_control(model, c.n_states(), Closed(settings, c, progress))?,
             format!("{} (closed loop)", model.name()),
         ),
-        None => (
+        (
+            None,
+            Some(
+                law @ SteerSettings {
+                    rate_filter: Some(tau),
+                    ..
+                },
+            ),
+        ) => (
+            dispatch_steer_filtered(model, FilteredSteered(settings, law, tau, progress))?,
+            format!("{} (steered, rate filter)", model.name()),
+        ),
+        (None, _) => (
             dispatch(model, Open(settings, progress))?,
             if steered {
                 format!("{} (steered)", model.name())

@@ -45,6 +45,9 @@ pub struct SteerLoopSettings {
     pub options: SteerTuneOptions,
     /// Steer-torque limit in the nonlinear check [N m]; `None` (default): unlimited.
     pub saturation: Option<f64>,
+    /// τ [s] of the law's filter on the rates, in the tuning, the certificate and the
+    /// nonlinear check alike; `None` (default): unfiltered.
+    pub rate_filter: Option<f64>,
     /// The nonlinear check's push: lean rate added to the steady motion [rad/s]. Default 0.5.
     pub push: f64,
     /// Length of the nonlinear check [s]. Default 5.
@@ -61,6 +64,7 @@ impl Default for SteerLoopSettings {
             spec: "dpm>=45".parse().expect("a valid default spec"),
             options: SteerTuneOptions::default(),
             saturation: None,
+            rate_filter: None,
             push: 0.5,
             check_time: 5.0,
         }
@@ -98,18 +102,8 @@ impl SteerLoopSettings {
                 format!("{n} speeds is more than {MAX_SPEEDS}"),
             ));
         }
-        if let Some(g) = &self.gains {
-            SteerSettings {
-                gains: *g,
-                saturation: None,
-            }
-            .validate()?;
-        }
-        SteerSettings {
-            gains: SteerGains::default(),
-            saturation: self.saturation,
-        }
-        .validate()?;
+        check_rate_filter(self.rate_filter)?;
+        self.law(self.gains.unwrap_or_default()).validate()?;
         crate::tune::steer::validate(&self.options)?;
         crate::tune::steer::check_spec(&self.spec)?;
         if !self.push.is_finite() {
@@ -122,6 +116,15 @@ impl SteerLoopSettings {
             ));
         }
         Ok(())
+    }
+
+    /// The law with `gains` and these settings' limit and filter.
+    pub fn law(&self, gains: SteerGains) -> SteerSettings {
+        SteerSettings {
+            gains,
+            saturation: self.saturation,
+            rate_filter: self.rate_filter,
+        }
     }
 
     /// The speeds: lo, lo + step, … ≤ hi.
@@ -196,6 +199,8 @@ pub struct SteerResult {
     pub tuned: bool,
     pub spec: Spec,
     pub saturation: Option<f64>,
+    /// τ of the law's rate filter [s], `None` when unfiltered.
+    pub rate_filter: Option<f64>,
     /// The push [rad/s] and the length [s] of the nonlinear check.
     pub push: f64,
     pub check_time: f64,
@@ -217,10 +222,7 @@ fn steered_ride(
     let settings = RideSettings {
         speed: Some(speed),
         perturb: BTreeMap::from([(modes[2].clone(), s.push)]),
-        steer: Some(SteerSettings {
-            gains,
-            saturation: s.saturation,
-        }),
+        steer: Some(s.law(gains)),
         watch: modes[0].clone(),
         run: RunSettings {
             t_end: s.check_time,
@@ -279,7 +281,7 @@ pub fn steer(
         if progress.cancelled() {
             return Err(Error::Interrupted);
         }
-        let lp = steer_loop(model, v)?;
+        let lp = steer_loop(model, v)?.with_rate_filter(s.rate_filter)?;
         modes = lp.modes().to_vec();
         let open_loop = lp.open_loop_eigenvalues()?;
         let (tune_status, best_fraction, certificate) = match s.gains {
@@ -328,6 +330,7 @@ pub fn steer(
         tuned: s.gains.is_none(),
         spec: s.spec.clone(),
         saturation: s.saturation,
+        rate_filter: s.rate_filter,
         push: s.push,
         check_time: s.check_time,
         verdict: if points.iter().all(|p| p.met) {
@@ -337,6 +340,20 @@ pub fn steer(
         },
         largest_step,
         points,
+    })
+}
+
+/// Refuses a rate filter that is not a time constant in (0, MAX_RATE_FILTER] s, naming the
+/// option `rate_filter`.
+pub(super) fn check_rate_filter(tau: Option<f64>) -> Result<()> {
+    SteerSettings {
+        rate_filter: tau,
+        ..SteerSettings::default()
+    }
+    .validate()
+    .map_err(|e| match e {
+        Error::Input { reason, .. } => Error::input("rate_filter", reason),
+        other => other,
     })
 }
 
@@ -522,6 +539,12 @@ impl SteerResult {
             self.check_time,
             self.modes.first().map_or("lean", String::as_str),
         );
+        if let Some(tau) = self.rate_filter {
+            out += &format!(
+                "  the law reads the rates through 1/({tau} s · s + 1) in the tuning, the \
+                 certificates and the nonlinear check\n"
+            );
+        }
         for p in self.points.iter().filter(|p| !p.met) {
             let why = match (&p.certificate, p.ride) {
                 (None, _) => "no stabilising gains found".to_string(),

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::steady::{steady_motion, SteadySettings};
-use super::steer::{csv_field, finite_gains, steer_loop};
+use super::steer::{check_rate_filter, csv_field, finite_gains, steer_loop};
 use crate::error::{Error, Result};
 use crate::linear::SteerGains;
 use crate::model::ResolvedModel;
@@ -39,6 +39,8 @@ pub struct SteerMapSettings {
     pub values: Axis,
     /// The other gains (the varied gain's entry is ignored). Default all 0.
     pub gains: SteerGains,
+    /// τ of the law's filter on the rates [s]; `None` (default): unfiltered.
+    pub rate_filter: Option<f64>,
 }
 
 impl Default for SteerMapSettings {
@@ -56,6 +58,7 @@ impl Default for SteerMapSettings {
                 n: 81,
             },
             gains: SteerGains::default(),
+            rate_filter: None,
         }
     }
 }
@@ -93,7 +96,8 @@ impl SteerMapSettings {
             ));
         }
         self.gain_index()?;
-        finite_gains(&self.gains)
+        finite_gains(&self.gains)?;
+        check_rate_filter(self.rate_filter)
     }
 
     /// The varied gain's position in [`SteerGains::NAMES`].
@@ -184,7 +188,7 @@ pub fn steer_map(
             if progress.cancelled() {
                 return Err(Error::Interrupted);
             }
-            let lp = steer_loop(model, v)?;
+            let lp = steer_loop(model, v)?.with_rate_filter(s.rate_filter)?;
             let column = values
                 .iter()
                 .map(|&x| {

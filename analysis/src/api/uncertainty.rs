@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::steady::{steady_motion, SteadySettings};
-use super::steer::{csv_field, finite_gains, steer_loop};
+use super::steer::{check_rate_filter, csv_field, finite_gains, steer_loop};
 use super::steer_map::BAND_STEP;
 use crate::error::{Error, Result};
 use crate::linear::SteerGains;
@@ -52,6 +52,9 @@ pub struct UncertaintySettings {
     /// The steer gains checked on every draw; `None` (default): tuned on the nominal bicycle
     /// at `speed` to `spec` (Clarabel, as `twv steer`).
     pub gains: Option<SteerGains>,
+    /// τ of the steer law's filter on the rates [s], in the tuning and every draw's check;
+    /// `None` (default): unfiltered.
+    pub rate_filter: Option<f64>,
     /// The margins each draw's closed loop is checked against. Default `dpm>=45`.
     pub spec: Spec,
     /// Which draws this run computes: shard i of N, a contiguous range of the indices.
@@ -68,6 +71,7 @@ impl Default for UncertaintySettings {
             hi: 10.0,
             speed: 3.0,
             gains: None,
+            rate_filter: None,
             spec: "dpm>=45".parse().expect("a valid default spec"),
             shard: Shard::WHOLE,
         }
@@ -107,6 +111,7 @@ impl UncertaintySettings {
         if let Some(g) = &self.gains {
             finite_gains(g)?;
         }
+        check_rate_filter(self.rate_filter)?;
         crate::tune::steer::check_spec(&self.spec)?;
         Shard::new(self.shard.index, self.shard.count)
             .map_err(|e| Error::input("shard", e.to_string()))?;
@@ -326,6 +331,7 @@ fn evaluate(model: &ResolvedModel, s: &UncertaintySettings, gains: &SteerGains) 
         &Silent,
     );
     let certificate = steer_loop(model, s.speed)
+        .and_then(|lp| Ok(lp.with_rate_filter(s.rate_filter)?))
         .ok()
         .and_then(|lp| certify_steer(&lp, gains, &s.spec).ok());
     match (band, certificate) {
@@ -358,7 +364,7 @@ fn design(
     if let Some(g) = s.gains {
         return Ok((g, None));
     }
-    let lp = steer_loop(model, s.speed)?;
+    let lp = steer_loop(model, s.speed)?.with_rate_filter(s.rate_filter)?;
     let stop = || progress.cancelled();
     let t = tune_steer(&lp, &s.spec, &SteerTuneOptions::default(), &stop)?;
     match t.certificate {

@@ -375,8 +375,8 @@ pub fn steer_gains_json(g: &SteerGains) -> Value {
            "k_delta_dot": g.k_delta_dot})
 }
 
-/// `steer_gains` and `steer_saturation`: a steer-torque law on an optional field (setting
-/// either turns it on).
+/// `steer_gains`, `steer_saturation` and `steer_filter`: a steer-torque law on an optional
+/// field (the gains turn it on; the limit and the filter refine it).
 pub fn steer<S: Clone + 'static>(access: fn(&mut S) -> &mut Option<SteerSettings>) -> Vec<Opt<S>> {
     vec![
         Opt::new(
@@ -402,38 +402,78 @@ pub fn steer<S: Clone + 'static>(access: fn(&mut S) -> &mut Option<SteerSettings
                     .map_or(Value::Null, |l| steer_gains_json(&l.gains))
             },
         ),
-        Opt::new(
+        steer_number(
+            access,
             "steer_saturation",
-            Kind::Number,
             "N m",
             "Steer-torque limit |T_delta| ≤ T_max (none: unlimited); needs steer_gains",
-            move |s: &mut S, v| {
-                let limit = if is_none(v) {
-                    None
-                } else {
-                    Some(as_number("steer_saturation", v)?)
-                };
-                match access(s) {
-                    Some(law) => law.saturation = limit,
-                    None if limit.is_none() => {}
-                    None => {
-                        return Err(Error::input(
-                            "steer_saturation",
-                            "limits the steer torque of steer_gains: give the gains too",
-                        ))
-                    }
-                }
-                Ok(())
-            },
-            move |s| {
-                let mut copy = s.clone();
-                access(&mut copy)
-                    .as_ref()
-                    .and_then(|l| l.saturation)
-                    .map_or(Value::Null, |t| json!(t))
-            },
+            |l| &mut l.saturation,
+        ),
+        steer_number(
+            access,
+            "steer_filter",
+            "s",
+            "Time constant τ of a first-order filter on the lean and steer rates the steer law \
+             reads, 1/(τs + 1) (none: read directly); needs steer_gains",
+            |l| &mut l.rate_filter,
         ),
     ]
+}
+
+/// What a steer law's rate filter is, for every job that offers one.
+pub const RATE_FILTER_HELP: &str = "Time constant τ of a first-order filter on the lean and \
+     steer rates the steer law reads, 1/(τs + 1) (none: read directly)";
+
+/// `rate_filter`: the optional τ [s] of a job's steer law, at `at`.
+pub fn rate_filter<S: Clone + 'static>(at: fn(&mut S) -> &mut Option<f64>) -> Opt<S> {
+    super::options::optional_number(
+        "rate_filter",
+        "s",
+        RATE_FILTER_HELP,
+        super::options::field(at),
+    )
+}
+
+/// An optional number of the steer law (`name`, the law's field `of`), refused without the
+/// law's gains.
+fn steer_number<S: Clone + 'static>(
+    access: fn(&mut S) -> &mut Option<SteerSettings>,
+    name: &'static str,
+    unit: &'static str,
+    help: &'static str,
+    of: fn(&mut SteerSettings) -> &mut Option<f64>,
+) -> Opt<S> {
+    Opt::new(
+        name,
+        Kind::Number,
+        unit,
+        help,
+        move |s: &mut S, v| {
+            let value = if is_none(v) {
+                None
+            } else {
+                Some(as_number(name, v)?)
+            };
+            match access(s) {
+                Some(law) => *of(law) = value,
+                None if value.is_none() => {}
+                None => {
+                    return Err(Error::input(
+                        name,
+                        "refines the law of steer_gains: give the gains too",
+                    ))
+                }
+            }
+            Ok(())
+        },
+        move |s| {
+            let mut copy = s.clone();
+            access(&mut copy)
+                .as_mut()
+                .and_then(|l| *of(l))
+                .map_or(Value::Null, |t| json!(t))
+        },
+    )
 }
 
 /// The gains as an object.

@@ -179,11 +179,7 @@ impl Job for Phase {
                                 "k_phi {} k_delta {} k_phi_dot {} k_delta_dot {}",
                                 g.k_phi, g.k_delta, g.k_phi_dot, g.k_delta_dot
                             );
-                            let law = SteerSettings {
-                                gains: g,
-                                saturation: None,
-                            };
-                            (label, Drive::Steer(law))
+                            (label, Drive::Steer(SteerSettings::gains(g)))
                         })
                         .collect();
                     Ok(())
@@ -213,6 +209,13 @@ impl Job for Phase {
                 field(|s: &mut PhaseSettings| &mut s.speed),
             )
             .conflicts(&["x0"]),
+            optional_number(
+                "steer_filter",
+                "s",
+                "Time constant τ of a first-order filter on the lean and steer rates every steer \
+                 law reads, 1/(τs + 1) (none: read directly); with --steer-gains",
+                field(|s: &mut PhaseSettings| &mut s.steer_filter),
+            ),
             Opt::new(
                 "x0",
                 Kind::Text,

@@ -4,7 +4,7 @@
 
 use serde_json::{json, Value};
 
-use super::groups::{steer_gains_json, steer_gains_value};
+use super::groups::{rate_filter, steer_gains_json, steer_gains_value};
 use super::options::{field, integer, is_none, number, optional_number, sub, Kind, Opt};
 use super::steady::speeds;
 use super::tune::spec_value;
@@ -93,6 +93,7 @@ impl Job for Steer {
                 "Steer-torque limit |T_delta| ≤ T_max in the nonlinear check (none: unlimited)",
                 field(|s: &mut SteerLoopSettings| &mut s.saturation),
             ),
+            rate_filter(|s: &mut SteerLoopSettings| &mut s.rate_filter),
             number(
                 "push",
                 "rad/s",

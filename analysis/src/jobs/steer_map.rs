@@ -3,7 +3,7 @@
 
 use serde_json::json;
 
-use super::groups::{steer_gains_json, steer_gains_value};
+use super::groups::{rate_filter, steer_gains_json, steer_gains_value};
 use super::options::{as_choice, Kind, Opt};
 use super::sweep::{axis, axis_text};
 use super::{Budget, Job, JobOutput, Verdict};
@@ -75,6 +75,7 @@ impl Job for SteerMap {
                 },
                 |s| steer_gains_json(&s.gains),
             ),
+            rate_filter(|s: &mut SteerMapSettings| &mut s.rate_filter),
         ]
     }
 

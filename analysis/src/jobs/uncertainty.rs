@@ -3,7 +3,7 @@
 
 use serde_json::{json, Value};
 
-use super::groups::{steer_gains_json, steer_gains_value};
+use super::groups::{rate_filter, steer_gains_json, steer_gains_value};
 use super::options::{as_integer, field, integer, is_none, number, Kind, Opt};
 use super::steady::speed_parts;
 use super::tune::spec_value;
@@ -83,6 +83,7 @@ impl Job for Uncertainty {
                 },
                 |s| s.gains.as_ref().map_or(Value::Null, steer_gains_json),
             ),
+            rate_filter(|s: &mut UncertaintySettings| &mut s.rate_filter),
             Opt::new(
                 "spec",
                 Kind::Text,

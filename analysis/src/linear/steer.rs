@@ -12,8 +12,16 @@
 //! positive feedback, so in the negative-feedback convention the margins are defined in, the
 //! return ratio broken at the steer-torque input is L(s) = −K (sI − A)⁻¹ b and the closed-loop
 //! matrix is A + b K.
+//!
+//! With a rate filter of time constant τ the law reads the rates through 1/(τs + 1), as a
+//! real sensor or a rider's neuromuscular lag would: two more states r = (r_φ̇, r_δ̇),
+//! ṙ = ((φ̇, δ̇) − r)/τ, and T_δ = k_φ φ + k_δ δ + k_φ̇ r_φ̇ + k_δ̇ r_δ̇. The closed loop is then
+//! 6 × 6 and the rate gains' terms of L carry the factor 1/(jωτ + 1); L stays linear in the
+//! gains, so the tuner's convex steps hold unchanged.
 
-use nalgebra::{Complex, DMatrix, DVector, Matrix4, Schur};
+use std::ops::IndexMut;
+
+use nalgebra::{Complex, DMatrix, DVector, Matrix4, Matrix6, Schur};
 use serde::{Deserialize, Serialize};
 
 use super::error::{check_finite, LinearError};
@@ -70,6 +78,71 @@ pub struct SteerLoop {
     modes: Vec<String>,
     a: DMatrix<f64>,
     b: DVector<f64>,
+    /// τ of the rates' first-order filter [s]; `None`: the rates are read directly.
+    rate_filter: Option<f64>,
+}
+
+/// Which entries of the rates' filter the law reads: the rates are modes 2 and 3 (φ̇, δ̇).
+const RATES: [usize; 2] = [2, 3];
+
+/// The closed loop of ẋ = A x + b T_δ (any state, n × n) under the steer law acting on the
+/// states `modes` (indices of φ, δ, φ̇, δ̇ in x): A + b K, or with a rate filter of time
+/// constant τ the (n + 2)-square matrix on (x, r_φ̇, r_δ̇)
+///
+/// ```text
+/// [ A + b K_angles   b k_φ̇   b k_δ̇ ]
+/// [ e_φ̇ᵀ/τ           −1/τ     0     ]
+/// [ e_δ̇ᵀ/τ            0      −1/τ   ]
+/// ```
+///
+/// The one formula for the lean-and-steer loop ([`SteerLoop`]) and every state's closed loop
+/// (`twv linearize --steer-gains`).
+pub fn steer_closed_loop(
+    a: &DMatrix<f64>,
+    b: &[f64],
+    modes: [usize; 4],
+    gains: &SteerGains,
+    rate_filter: Option<f64>,
+) -> DMatrix<f64> {
+    let n = a.nrows();
+    let extra = if rate_filter.is_some() { 2 } else { 0 };
+    let mut m = DMatrix::zeros(n + extra, n + extra);
+    write_closed_loop(&mut m, a, b, modes, gains, rate_filter);
+    m
+}
+
+/// [`steer_closed_loop`] written into `m` (zero, of the closed loop's size): a heap or a stack
+/// matrix alike.
+fn write_closed_loop<M: IndexMut<(usize, usize), Output = f64>>(
+    m: &mut M,
+    a: &DMatrix<f64>,
+    b: &[f64],
+    modes: [usize; 4],
+    gains: &SteerGains,
+    rate_filter: Option<f64>,
+) {
+    let n = a.nrows();
+    for i in 0..n {
+        for j in 0..n {
+            m[(i, j)] = a[(i, j)];
+        }
+    }
+    // Where each gain reads: its mode, or a rate's filter state.
+    let read = |j: usize| match (rate_filter, RATES.iter().position(|&r| r == j)) {
+        (Some(_), Some(f)) => n + f,
+        _ => modes[j],
+    };
+    for (j, kj) in gains.row().iter().enumerate() {
+        for (i, bi) in b.iter().enumerate() {
+            m[(i, read(j))] += bi * kj;
+        }
+    }
+    if let Some(tau) = rate_filter {
+        for (f, &r) in RATES.iter().enumerate() {
+            m[(n + f, modes[r])] = 1.0 / tau;
+            m[(n + f, n + f)] = -1.0 / tau;
+        }
+    }
 }
 
 /// The closed loop's eigenvalues.
@@ -123,7 +196,34 @@ impl SteerLoop {
         if b.iter().all(|v| *v == 0.0) {
             return Err(LinearError::ZeroInput);
         }
-        Ok(Self { speed, modes, a, b })
+        Ok(Self {
+            speed,
+            modes,
+            a,
+            b,
+            rate_filter: None,
+        })
+    }
+
+    /// The same loop with the law reading the rates through a first-order filter of time
+    /// constant `tau` [s] (`None`: unfiltered).
+    pub fn with_rate_filter(mut self, tau: Option<f64>) -> Result<Self, LinearError> {
+        if let Some(t) = tau {
+            check_finite("the rate filter's time constant", [t].iter())?;
+            if t <= 0.0 {
+                return Err(LinearError::NonPositive {
+                    what: "rate filter time constant",
+                    value: t,
+                });
+            }
+        }
+        self.rate_filter = tau;
+        Ok(self)
+    }
+
+    /// τ of the rate filter [s], if the law has one.
+    pub fn rate_filter(&self) -> Option<f64> {
+        self.rate_filter
     }
 
     /// The speed [m/s].
@@ -151,16 +251,15 @@ impl SteerLoop {
         eigenvalues(&self.a)
     }
 
-    /// A + b K.
+    /// A + b K (6 × 6 with the rate filter's states, see [`steer_closed_loop`]).
     pub fn closed_loop_matrix(&self, g: &SteerGains) -> DMatrix<f64> {
-        let k = g.row();
-        let mut m = self.a.clone();
-        for i in 0..4 {
-            for (j, kj) in k.iter().enumerate() {
-                m[(i, j)] += self.b[i] * kj;
-            }
-        }
-        m
+        steer_closed_loop(
+            &self.a,
+            self.b.as_slice(),
+            [0, 1, 2, 3],
+            g,
+            self.rate_filter,
+        )
     }
 
     /// The closed loop's eigenvalues.
@@ -187,21 +286,37 @@ impl SteerLoop {
     /// on the stack: what a map asks of each of its cells, without the eigenvalues' vector
     /// (`None` when the Schur iteration does not converge or the result is not finite).
     pub fn closed_loop_abscissa(&self, g: &SteerGains) -> Option<f64> {
-        let k = g.row();
-        let m = Matrix4::from_fn(|i, j| self.a[(i, j)] + self.b[i] * k[j]);
-        if m.iter().any(|v| !v.is_finite()) {
-            return None;
+        let largest = |e: &[Complex<f64>]| e.iter().fold(f64::NEG_INFINITY, |a, e| a.max(e.re));
+        // The closed loop on the stack, at the size it has.
+        macro_rules! on_stack {
+            ($matrix:ty) => {{
+                let mut m = <$matrix>::zeros();
+                let modes = [0, 1, 2, 3];
+                write_closed_loop(
+                    &mut m,
+                    &self.a,
+                    self.b.as_slice(),
+                    modes,
+                    g,
+                    self.rate_filter,
+                );
+                if m.iter().any(|v| !v.is_finite()) {
+                    return None;
+                }
+                let schur = Schur::try_new(m, f64::EPSILON, 10_000)?;
+                largest(schur.complex_eigenvalues().as_slice())
+            }};
         }
-        let schur = Schur::try_new(m, f64::EPSILON, 10_000)?;
-        let abscissa = schur
-            .complex_eigenvalues()
-            .iter()
-            .fold(f64::NEG_INFINITY, |a, e| a.max(e.re));
+        let abscissa = match self.rate_filter {
+            None => on_stack!(Matrix4<f64>),
+            Some(_) => on_stack!(Matrix6<f64>),
+        };
         abscissa.is_finite().then_some(abscissa)
     }
 
-    /// ∂L(jω)/∂k_j for each gain: −e_jᵀ (jωI − A)⁻¹ b (`None` at a pole on the axis). L is
-    /// linear in the gains, L = Σ k_j basis_j, which is what the tuner's convex steps use.
+    /// ∂L(jω)/∂k_j for each gain: −e_jᵀ (jωI − A)⁻¹ b, the rates' two times 1/(jωτ + 1)
+    /// with a rate filter (`None` at a pole on the axis). L is linear in the gains,
+    /// L = Σ k_j basis_j, which is what the tuner's convex steps use.
     pub fn basis(&self, w: f64) -> Option<[Complex<f64>; 4]> {
         let m = DMatrix::from_fn(4, 4, |i, j| {
             let diagonal = if i == j {
@@ -216,7 +331,16 @@ impl SteerLoop {
         if x.iter().any(|v| !(v.re.is_finite() && v.im.is_finite())) {
             return None;
         }
-        Some(std::array::from_fn(|j| -x[j]))
+        let filter = self.rate_filter.map_or(Complex::new(1.0, 0.0), |tau| {
+            1.0 / Complex::new(1.0, w * tau)
+        });
+        Some(std::array::from_fn(|j| {
+            if RATES.contains(&j) {
+                -x[j] * filter
+            } else {
+                -x[j]
+            }
+        }))
     }
 
     /// L(jω) of the gains.
@@ -234,6 +358,7 @@ impl SteerLoop {
             .map(|p| p.norm())
             .collect();
         s.extend(closed.eigenvalues.iter().map(|p| p.norm()));
+        s.extend(self.rate_filter.map(|tau| 1.0 / tau));
         Ok(s)
     }
 

@@ -8,6 +8,7 @@
 //! stable Rust cannot spell for a generic NX; [`dispatch_control`] resolves the model with NX as
 //! a literal and matches NZ ∈ 0..=3 to `{NX + NZ}`: four instantiations per model that has a
 //! pitch to control (vehicle8, vehicle7, segway7; IR files with 8, 7 or 4 states).
+//! [`dispatch_steer_filtered`] does the same for a steer law's rate filter (NZ = 2).
 
 use twv_generated::{Segway7, Vehicle7, Vehicle8};
 use twv_ir::{Interpreted, MAX_NU};
@@ -142,6 +143,32 @@ pub fn dispatch_control<T: ControlTask>(
                 _ => Err(no_pitch(&resolved.origin)),
             }
         }
+    }
+}
+
+/// Runs `task` on the resolved model with NA = NX + 2: a steer law with a rate filter
+/// ([`crate::control::steer::FilteredSteer`]). Only a model with a steer input has one, and
+/// none is generated, so only an IR's state counts resolve: 9, the Whipple bicycle's (its
+/// measured variants included). Another count is one more literal in the match below.
+pub fn dispatch_steer_filtered<T: ControlTask>(
+    resolved: &ResolvedModel,
+    task: T,
+) -> Result<T::Output> {
+    crate::control::steer::steer_input(resolved.name(), &resolved.inputs())?;
+    let ir = &resolved.ir;
+    let native = resolved.native.clone();
+    match (&resolved.engine, ir.nx()) {
+        (Engine::Interpreted | Engine::Jit, 9) => {
+            let model = Interpreted::<9, MAX_NU>::with_native(ir, &resolved.params, native)?;
+            task.run::<9, MAX_NU, 11, _>(&model, resolved)
+        }
+        (_, nx) => Err(Error::Unsupported {
+            model: resolved.name().to_string(),
+            reason: format!(
+                "a steer law with a rate filter runs on models of 9 states (the Whipple \
+                 bicycle's form); this one has {nx}: steer it without steer_filter"
+            ),
+        }),
     }
 }
 

@@ -101,10 +101,7 @@ fn bicycle(
         )
     };
     let unsteered = push(None)?;
-    let steered = push(Some(SteerSettings {
-        gains: gains.unwrap_or_default(),
-        saturation: None,
-    }))?;
+    let steered = push(Some(SteerSettings::gains(gains.unwrap_or_default())))?;
     let uncertainty = match measured {
         Some(params) => {
             let measured = ModelSpec::shipped("whipple")

@@ -26,6 +26,7 @@ mod report;
 mod serve;
 mod steady;
 mod steer;
+mod steer_filter;
 mod steer_map;
 mod sweep;
 mod sweep_lanes;

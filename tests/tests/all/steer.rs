@@ -19,12 +19,12 @@ use twv_analysis::tune::TuneStatus;
 use twv_ir::Interpreted;
 use twv_model::Model;
 
-fn bicycle() -> ResolvedModel {
+pub(crate) fn bicycle() -> ResolvedModel {
     ModelSpec::shipped("whipple").resolve().unwrap()
 }
 
 /// Meijaard et al. (2007), eq. (5.4): M, C1, K0 (without g), K2 at the benchmark parameters.
-fn benchmark() -> [DMatrix<f64>; 4] {
+pub(crate) fn benchmark() -> [DMatrix<f64>; 4] {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data/meijaard2007.json");
     let v: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     ["M", "C1", "K0", "K2"].map(|k| {
@@ -53,12 +53,12 @@ pub(crate) fn benchmark_closed_loop(v: f64, g: &SteerGains) -> DMatrix<f64> {
     a
 }
 
-fn sorted(mut e: Vec<Complex<f64>>) -> Vec<Complex<f64>> {
+pub(crate) fn sorted(mut e: Vec<Complex<f64>>) -> Vec<Complex<f64>> {
     e.sort_by(|a, b| a.re.total_cmp(&b.re).then(a.im.total_cmp(&b.im)));
     e
 }
 
-const GAINS: [SteerGains; 2] = [
+pub(crate) const GAINS: [SteerGains; 2] = [
     SteerGains {
         k_phi: 74.7,
         k_delta: -53.7,
@@ -108,6 +108,7 @@ fn the_nonlinear_closed_loop_linearised_at_straight_running_is_the_linear_loop()
         let settings = SteerSettings {
             gains: GAINS[0],
             saturation: Some(50.0),
+            rate_filter: None,
         };
         let law = SteerLaw::<9, 4>::new(
             "whipple",
@@ -251,10 +252,24 @@ fn destabilising_gains_get_a_computed_verdict_and_bad_input_one_line() {
 /// eigenvalues — the four of the lean-and-steer loop (a pair's real part twice) and 0 for
 /// every other direction (position, heading, wheel angles, speed: no restoring force) — and
 /// unsteered the same holds with the open loop's eigenvalues, one of them > 0.
+/// Spectrum settings for a steady motion: RK4 at 10 ms, a 10 s transient, then `seconds` of
+/// averaging sampled every 0.1 s.
+pub(crate) fn averaged_over(seconds: f64) -> twv_analysis::lyapunov::LyapunovSettings {
+    use twv_analysis::lyapunov::{IntegratorChoice, LyapunovSettings};
+    LyapunovSettings {
+        t_sample: 0.1,
+        iterations: (seconds / 0.1).round() as usize,
+        transient: 10.0,
+        integrator: IntegratorChoice::Rk4 { h: 0.01 },
+        record_running: false,
+        trace_check: false,
+        ..LyapunovSettings::preset_paper()
+    }
+}
+
 #[test]
 fn the_steered_bicycles_lyapunov_spectrum_is_its_closed_loop_eigenvalues() {
     use twv_analysis::api::{spectrum, SpectrumSettings};
-    use twv_analysis::lyapunov::{IntegratorChoice, LyapunovSettings};
     let bike = bicycle();
     // Lean-rate feedback alone: at 3 m/s the benchmark bicycle needs about 8 N m s/rad.
     let g = SteerGains {
@@ -269,19 +284,8 @@ fn the_steered_bicycles_lyapunov_spectrum_is_its_closed_loop_eigenvalues() {
         };
         let s = SpectrumSettings {
             speed: Some(3.0),
-            steer: gains.map(|gains| SteerSettings {
-                gains,
-                saturation: None,
-            }),
-            lyapunov: LyapunovSettings {
-                t_sample: 0.1,
-                iterations: 600,
-                transient: 10.0,
-                integrator: IntegratorChoice::Rk4 { h: 0.01 },
-                record_running: false,
-                trace_check: false,
-                ..LyapunovSettings::preset_paper()
-            },
+            steer: gains.map(SteerSettings::gains),
+            lyapunov: averaged_over(60.0),
             ..SpectrumSettings::default()
         };
         let r = spectrum(&bike, &s, &Silent).unwrap();
@@ -328,10 +332,7 @@ fn linearize_closes_the_steer_loop_about_the_steady_motion() {
         for g in &GAINS {
             let settings = LinearSettings {
                 speed: Some(v),
-                steer: Some(SteerSettings {
-                    gains: *g,
-                    saturation: None,
-                }),
+                steer: Some(SteerSettings::gains(*g)),
                 ..LinearSettings::default()
             };
             let r = analyse(&model, &settings).unwrap();
@@ -375,10 +376,7 @@ fn linearize_closes_the_steer_loop_about_the_steady_motion() {
     // The verdict flips with the poles: lean and lean-rate feedback too weak for 3 m/s.
     let at = |gains: SteerGains| LinearSettings {
         speed: Some(3.0),
-        steer: Some(SteerSettings {
-            gains,
-            saturation: None,
-        }),
+        steer: Some(SteerSettings::gains(gains)),
         ..LinearSettings::default()
     };
     let weak = analyse(
@@ -429,10 +427,7 @@ fn linearize_finds_the_modes_of_the_bicycle_at_rest() {
 #[test]
 fn linearize_refuses_a_steer_law_without_its_steady_motion_in_one_line() {
     use twv_analysis::api::{analyse, At, LinearSettings};
-    let law = Some(SteerSettings {
-        gains: GAINS[0],
-        saturation: None,
-    });
+    let law = Some(SteerSettings::gains(GAINS[0]));
     let error = |m: &ResolvedModel, s: LinearSettings| analyse(m, &s).unwrap_err().to_string();
     let cases = [
         (
@@ -496,12 +491,7 @@ fn the_steered_bicycles_phase_portraits_follow_its_steer_loop() {
         k_phi_dot: 10.0,
         ..SteerGains::default()
     };
-    let law = |gains| {
-        Drive::Steer(SteerSettings {
-            gains,
-            saturation: None,
-        })
-    };
+    let law = |gains| Drive::Steer(SteerSettings::gains(gains));
     let settings = PhaseSettings {
         portraits: vec![("design".into(), law(GAINS[0])), ("weak".into(), law(weak))],
         tilts: vec![0.02, -0.01],

@@ -31,6 +31,7 @@ fn every_cell_is_the_benchmark_equations_closed_by_the_gains() {
             k_delta: -15.0,
             ..SteerGains::default()
         },
+        rate_filter: None,
     };
     let r = steer_map(&bicycle(), &s, &Silent).unwrap();
     assert_eq!(r.abscissa.len(), 18 * 11);

@@ -1,5 +1,7 @@
 //! The steer-torque law of a two-wheeler with a steer input (the bicycle), on the nonlinear
-//! model: T_δ = sat(k_φ φ + k_δ δ + k_φ̇ φ̇ + k_δ̇ δ̇), every other input held at its given value.
+//! model: T_δ = sat(k_φ φ + k_δ δ + k_φ̇ φ̇ + k_δ̇ δ̇), every other input held at its given value;
+//! with a rate filter the rates are read through 1/(τs + 1), two states of the law's own
+//! ([`FilteredSteer`]).
 //! The linear analysis and the tuning of the same law are [`crate::linear::steer`] and
 //! [`crate::tune::steer`].
 
@@ -9,7 +11,10 @@ use crate::error::{Error, Result};
 use crate::integrate::FeedbackLaw;
 use crate::linear::steer::{SteerGains, STEER_INPUT};
 
-/// The law's settings. Default: no gains (no steering) and no torque limit.
+mod filtered;
+pub use filtered::FilteredSteer;
+
+/// The law's settings. Default: no gains (no steering), no torque limit, no rate filter.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SteerSettings {
@@ -17,9 +22,20 @@ pub struct SteerSettings {
     pub gains: SteerGains,
     /// The torque limit |T_δ| ≤ T_max [N m]; `None`: unlimited.
     pub saturation: Option<f64>,
+    /// Time constant τ [s] of a first-order filter on the lean and steer rates the law reads
+    /// (a rate sensor's or a rider's lag); `None`: the rates are read directly.
+    pub rate_filter: Option<f64>,
 }
 
 impl SteerSettings {
+    /// The law with `gains` and nothing else: no limit, no filter.
+    pub fn gains(gains: SteerGains) -> Self {
+        Self {
+            gains,
+            ..Self::default()
+        }
+    }
+
     /// Checks the gains and the limit; the error names the field.
     pub fn validate(&self) -> Result<()> {
         for (name, k) in SteerGains::NAMES.iter().zip(self.gains.row()) {
@@ -35,9 +51,31 @@ impl SteerSettings {
                 ));
             }
         }
+        if let Some(t) = self.rate_filter {
+            if !(t.is_finite() && t > 0.0 && t <= MAX_RATE_FILTER) {
+                return Err(Error::input(
+                    "steer_filter",
+                    format!(
+                        "{t}: a rate filter's time constant must be in (0, {MAX_RATE_FILTER}] s"
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
+
+    /// Controller states the law adds to the model's: the two filtered rates, or none.
+    pub fn n_states(&self) -> usize {
+        if self.rate_filter.is_some() {
+            2
+        } else {
+            0
+        }
+    }
 }
+
+/// The longest rate filter [s]: a lag of a minute is no longer a rate the law reads.
+pub const MAX_RATE_FILTER: f64 = 60.0;
 
 /// The index of the steer torque among `inputs` of `model`, or why it has none.
 pub fn steer_input(model: &str, inputs: &[&str]) -> Result<usize> {
@@ -132,39 +170,60 @@ impl<const NX: usize, const NU: usize> SteerLaw<NX, NU> {
         Self::new(resolved.name(), states, inputs, &modes, settings, base)
     }
 
-    /// The unsaturated torque command at `x`.
-    fn command(&self, x: &[f64; NX]) -> f64 {
-        self.modes
-            .iter()
-            .zip(self.gains)
-            .map(|(&i, k)| k * x[i])
-            .sum()
+    /// The law's readings at `x`: φ, δ, φ̇, δ̇.
+    fn readings(&self, x: &[f64; NX]) -> [f64; 4] {
+        self.modes.map(|i| x[i])
+    }
+
+    /// The applied torque [N m] for the readings `r` (φ, δ and the rates as the law reads
+    /// them), and whether it is below the limit (the law's derivative is then K, else 0).
+    pub(crate) fn torque_of(&self, r: [f64; 4]) -> (f64, bool) {
+        let c: f64 = r.iter().zip(self.gains).map(|(v, k)| k * v).sum();
+        match self.saturation {
+            Some(t) if c.abs() > t => (c.clamp(-t, t), false),
+            _ => (c, true),
+        }
     }
 
     /// The applied steer torque at `x` [N m].
     pub fn torque(&self, x: &[f64; NX]) -> f64 {
-        let c = self.command(x);
-        match self.saturation {
-            Some(t) => c.clamp(-t, t),
-            None => c,
-        }
+        self.torque_of(self.readings(x)).0
+    }
+
+    /// The inputs with the steer torque `torque`, the others held.
+    pub(crate) fn inputs(&self, torque: f64) -> [f64; NU] {
+        let mut u = self.base;
+        u[self.input] = torque;
+        u
+    }
+
+    /// Indices of φ, δ, φ̇, δ̇ in the state.
+    pub(crate) fn modes(&self) -> [usize; 4] {
+        self.modes
+    }
+
+    /// Index of the steer torque in the input.
+    pub(crate) fn input_index(&self) -> usize {
+        self.input
+    }
+
+    /// The gains over (φ, δ, φ̇, δ̇).
+    pub(crate) fn gain_row(&self) -> [f64; 4] {
+        self.gains
     }
 }
 
 impl<const NX: usize, const NU: usize> FeedbackLaw<NX, NU> for SteerLaw<NX, NU> {
     #[inline]
     fn input(&self, _t: f64, x: &[f64; NX]) -> [f64; NU] {
-        let mut u = self.base;
-        u[self.input] = self.torque(x);
-        u
+        self.inputs(self.torque(x))
     }
 
     fn jacobian(&self, _t: f64, x: &[f64; NX], out: &mut [[f64; NX]; NU]) {
         for row in out.iter_mut() {
             row.fill(0.0);
         }
-        let saturated = self.saturation.is_some_and(|t| self.command(x).abs() > t);
-        if !saturated {
+        if self.torque_of(self.readings(x)).1 {
             for (&i, k) in self.modes.iter().zip(self.gains) {
                 out[self.input][i] = k;
             }
