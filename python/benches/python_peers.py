@@ -7,7 +7,9 @@ In one run, on vehicle8 with the paper parameters:
      parallel) and vs NumPy-vectorised code (the IR's instructions as array operations);
   3. the study-preset spectrum (8 exponents, RK4 h = 1e-3, T = 0.1 s, K = 100) from Python vs
      the NumPy + CasADi implementation of the same algorithm and vs jitcode (if installed);
-  4. a 100×100 max-Lyapunov map from Python vs the same map from the CLI.
+  4. a 100×100 max-Lyapunov map from Python vs the same map from the CLI;
+  5. a few jobs from Python vs the same jobs' compute time in the CLI (its process start
+     measured and taken off).
 
 Build the extension optimised first:
     VIRTUAL_ENV=$PWD/.venv .venv/bin/maturin develop --release -m python/Cargo.toml
@@ -210,6 +212,54 @@ def main():
     print("\n| task | twv from Python | peer | peer time | peer / twv |\n|---|---:|---|---:|---:|")
     for task, ours, peer, theirs in rows:
         print(f"| {task} | {fmt(ours)} | {peer} | {fmt(theirs)} | {theirs / ours:.2f} |")
+    python_against_cli(binary, args.quick)
+
+
+# The same jobs from Python and from the CLI: (job, model, options), the options as the CLI
+# takes them (the Python keyword arguments are the same names with the same values).
+SAME_JOBS = [
+    ("lyapunov", "vehicle8", {"x0": "0.1,0,0,0,0,0,0,0", "preset": "paper"}),
+    ("lyapunov", "whipple", {"speed": "3", "steer_gains": "k_phi_dot=15", "h": "0.01"}),
+    ("ride", "whipple", {"speed": "3", "perturb": "w_phi=0.5", "steer_gains": "k_phi_dot=15"}),
+    ("steer_map", "whipple", {"speed": "0.5:10:100", "values": "-20:60:100"}),
+    ("steer", "whipple", {}),
+]
+
+
+def python_against_cli(binary: Path, quick: bool) -> None:
+    """Each job of SAME_JOBS from Python (model loading included) and from the CLI (`--json`,
+    the result on stdout), alternately, best of several. The CLI's time includes starting a
+    process, measured alone as `twv --version`; the job's compute time in the CLI is the
+    difference, and the goal is Python ≤ 1.1 × that."""
+    repeat = 3 if quick else 7
+
+    def cli(argv):
+        subprocess.run([str(binary), *argv], check=True, stdout=subprocess.DEVNULL)
+
+    start = best(lambda: cli(["--version"]), repeat=repeat * 3)
+    print(
+        f"\nThe same jobs from Python and the CLI (the CLI's process start, `twv --version`: "
+        f"{fmt(start)})\n\n| job | model | Python | CLI | CLI − start | Python / (CLI − start) |"
+        "\n|---|---|---:|---:|---:|---:|"
+    )
+    for job, model, options in SAME_JOBS:
+        flags = [f"--{k.replace('_', '-')}={v}" for k, v in options.items()]
+        argv = [job.replace("_", "-"), "--model", model, *flags, "--json", "--quiet"]
+        run = getattr(twv, job)
+        t_py, t_cli = [], []
+        for _ in range(repeat):
+            t = time.perf_counter()
+            run(twv.Model(model), **options)
+            t_py.append(time.perf_counter() - t)
+            t = time.perf_counter()
+            cli(argv)
+            t_cli.append(time.perf_counter() - t)
+        ours, theirs = min(t_py), min(t_cli)
+        compute = theirs - start
+        print(
+            f"| {job} | {model} | {fmt(ours)} | {fmt(theirs)} | {fmt(compute)} | "
+            f"{ours / compute:.2f} |"
+        )
 
 
 def fmt(seconds: float) -> str:

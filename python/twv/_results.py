@@ -4,6 +4,7 @@ shape), named fields, units — with the summary `twv <job>` prints as their `re
 
 from __future__ import annotations
 
+import functools
 import io
 from typing import Any
 
@@ -33,6 +34,8 @@ def _complex(pairs) -> np.ndarray:
 
 
 def _csv(text: str | None) -> tuple[list[str], np.ndarray]:
+    """The library's CSV (a header, then rows of numbers at full precision) as column names
+    and a 2-D array."""
     if not text:
         return [], np.zeros((0, 0))
     header, _, body = text.partition("\n")
@@ -84,16 +87,33 @@ class SpectrumResult(Result):
     """A Lyapunov spectrum: exponents λ1 ≥ … [1/s], batch-means stderr (1σ), Σλ, ⟨tr J⟩,
     Kaplan–Yorke dimension, the verdict, and the running estimates."""
 
-    def __init__(self, *args):
-        super().__init__(*args)
-        columns, data = _csv(self.csv)
-        k = len(self.raw["exponents"])
-        self.t = data[:, 0] if data.size else np.zeros(0)
+    @functools.cached_property
+    def _table(self) -> tuple[list[str], np.ndarray]:
+        # Parsed when first asked for: most calls want the exponents only.
+        return _csv(self.csv)
+
+    @property
+    def columns(self) -> list[str]:
+        """The running estimates' columns: t, λ1, …, Σλ."""
+        return self._table[0]
+
+    @property
+    def t(self) -> np.ndarray:
         """Time since the transient [s] of each running estimate."""
-        self.running = data[:, 1 : 1 + k] if data.size else np.zeros((0, k))
+        data = self._table[1]
+        return data[:, 0] if data.size else np.zeros(0)
+
+    @property
+    def running(self) -> np.ndarray:
         """Running exponents [1/s], one row per re-orthonormalisation."""
-        self.running_sum = data[:, 1 + k] if data.size else np.zeros(0)
-        self.columns = columns
+        data, k = self._table[1], len(self.raw["exponents"])
+        return data[:, 1 : 1 + k] if data.size else np.zeros((0, k))
+
+    @property
+    def running_sum(self) -> np.ndarray:
+        """Running Σλ [1/s]."""
+        data = self._table[1]
+        return data[:, 1 + len(self.raw["exponents"])] if data.size else np.zeros(0)
 
     @property
     def exponents(self) -> np.ndarray:
