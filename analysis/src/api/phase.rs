@@ -260,8 +260,7 @@ impl ControlTask for SteerPhase<'_> {
         resolved: &ResolvedModel,
     ) -> Result<Self::Output> {
         let (starts, steady, law) = self.parts::<NX, NU>(&model.info(), resolved)?;
-        let tau = self.law.rate_filter.unwrap_or(f64::NAN);
-        let field = FilteredSteer::<_, NX, NU, NA>::new(model, law, tau)?;
+        let field = FilteredSteer::<_, NX, NU, NA>::new(model, law)?;
         let starts: Vec<[f64; NA]> = starts.iter().map(|x| field.initial_state(x)).collect();
         let abscissa = loop_abscissa(&field, &field.initial_state(&steady))?;
         Ok((

@@ -234,7 +234,7 @@ impl ModelTask for Ride<'_> {
 
 /// A ride steered by a law with a rate filter: the closed loop on NA = NX + 2 states, whose
 /// filtered rates are two more columns.
-struct FilteredRide<'a>(&'a RideSettings, &'a dyn Progress, SteerSettings, f64);
+struct FilteredRide<'a>(&'a RideSettings, &'a dyn Progress, SteerSettings);
 
 impl ControlTask for FilteredRide<'_> {
     type Output = RideResult;
@@ -243,11 +243,11 @@ impl ControlTask for FilteredRide<'_> {
         model: &M,
         resolved: &ResolvedModel,
     ) -> Result<RideResult> {
-        let (s, settings, tau) = (self.0, &self.2, self.3);
+        let (s, settings) = (self.0, &self.2);
         let info = model.info();
         let (watch, x0, u) = start::<NX, NU>(s, resolved, &info)?;
         let law = SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, settings, u)?;
-        let field = FilteredSteer::<_, NX, NU, NA>::new(model, law, tau)?;
+        let field = FilteredSteer::<_, NX, NU, NA>::new(model, law)?;
         let xa = field.initial_state(&x0);
         let traj = integrate(field, &xa, watch, &s.run, self.1)?;
         let mut states: Vec<String> = info.states.iter().map(|n| n.to_string()).collect();
@@ -317,12 +317,9 @@ pub fn ride(
 ) -> Result<RideResult> {
     settings.validate()?;
     match settings.steer {
-        Some(
-            law @ SteerSettings {
-                rate_filter: Some(tau),
-                ..
-            },
-        ) => dispatch_steer_filtered(model, FilteredRide(settings, progress, law, tau)),
+        Some(law) if law.rate_filter.is_some() => {
+            dispatch_steer_filtered(model, FilteredRide(settings, progress, law))
+        }
         _ => dispatch(model, Ride(settings, progress)),
     }
 }

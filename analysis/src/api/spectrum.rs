@@ -261,7 +261,7 @@ impl ControlTask for Closed<'_> {
 
 /// The spectrum of the model steered by a law with a rate filter: on NA = NX + 2 states, from
 /// x0 and the filter at its rates.
-struct FilteredSteered<'a>(&'a SpectrumSettings, SteerSettings, f64, &'a dyn Progress);
+struct FilteredSteered<'a>(&'a SpectrumSettings, SteerSettings, &'a dyn Progress);
 
 impl ControlTask for FilteredSteered<'_> {
     type Output = (Vec<f64>, Vec<f64>, LyapunovResult, Option<Timing>);
@@ -273,9 +273,9 @@ impl ControlTask for FilteredSteered<'_> {
         let info = model.info();
         let (x0, u) = start::<NX, NU>(self.0, &info)?;
         let law = SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, &self.1, u)?;
-        let field = FilteredSteer::<_, NX, NU, NA>::new(model, law, self.2)?;
+        let field = FilteredSteer::<_, NX, NU, NA>::new(model, law)?;
         let xa = field.initial_state(&x0);
-        let (result, timing) = timed(self.0, &field, &xa, self.3)?;
+        let (result, timing) = timed(self.0, &field, &xa, self.2)?;
         Ok((xa.to_vec(), u[..info.inputs.len()].to_vec(), result, timing))
     }
 }
@@ -311,16 +311,8 @@ pub fn spectrum(
             dispatch_control(model, c.n_states(), Closed(settings, c, progress))?,
             format!("{} (closed loop)", model.name()),
         ),
-        (
-            None,
-            Some(
-                law @ SteerSettings {
-                    rate_filter: Some(tau),
-                    ..
-                },
-            ),
-        ) => (
-            dispatch_steer_filtered(model, FilteredSteered(settings, law, tau, progress))?,
+        (None, Some(law)) if law.rate_filter.is_some() => (
+            dispatch_steer_filtered(model, FilteredSteered(settings, law, progress))?,
             format!("{} (steered, rate filter)", model.name()),
         ),
         (None, _) => (

@@ -174,7 +174,7 @@ fn filtered_field_check(tau: f64, saturation: Option<f64>) {
         [0.0; 4],
     )
     .unwrap();
-    let field = FilteredSteer::<_, 9, 4, 11>::new(&bike, law, tau).unwrap();
+    let field = FilteredSteer::<_, 9, 4, 11>::new(&bike, law).unwrap();
     assert_eq!(
         FilteredSteer::<Interpreted<9, 4>, 9, 4, 11>::filter_states(info.states, &law),
         ["w_phi_f".to_string(), "w_delta_f".to_string()]

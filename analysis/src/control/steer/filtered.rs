@@ -42,8 +42,8 @@ impl<'a, M, const NX: usize, const NU: usize, const NA: usize> FilteredSteer<'a,
 where
     M: Model<NX, NU>,
 {
-    /// `model` closed by `law`, its rates read through 1/(τs + 1).
-    pub fn new(model: &'a M, law: SteerLaw<NX, NU>, tau: f64) -> Result<Self, ControlError> {
+    /// `model` closed by `law`, its rates read through the law's filter 1/(τs + 1).
+    pub fn new(model: &'a M, law: SteerLaw<NX, NU>) -> Result<Self, ControlError> {
         const { assert!(NA >= NX, "the augmented size NA must be ≥ NX") };
         if NA != NX + 2 {
             return Err(ControlError::AugmentedSize {
@@ -52,6 +52,9 @@ where
                 nz: 2,
             });
         }
+        let tau = law.rate_filter().ok_or_else(|| {
+            ControlError::InvalidRun("the steer law has no rate filter (steer_filter)".into())
+        })?;
         if !(tau.is_finite() && tau > 0.0) {
             return Err(ControlError::InvalidSetting {
                 what: "steer_filter",

@@ -101,6 +101,8 @@ pub struct SteerLaw<const NX: usize, const NU: usize> {
     input: usize,
     gains: [f64; 4],
     saturation: Option<f64>,
+    /// τ of the rates' filter [s]: read by [`FilteredSteer`], the field that has its states.
+    rate_filter: Option<f64>,
     /// The other inputs, held.
     base: [f64; NU],
 }
@@ -151,6 +153,7 @@ impl<const NX: usize, const NU: usize> SteerLaw<NX, NU> {
             input,
             gains: settings.gains.row(),
             saturation: settings.saturation,
+            rate_filter: settings.rate_filter,
             base,
         })
     }
@@ -205,6 +208,11 @@ impl<const NX: usize, const NU: usize> SteerLaw<NX, NU> {
     /// Index of the steer torque in the input.
     pub(crate) fn input_index(&self) -> usize {
         self.input
+    }
+
+    /// τ of the rates' filter [s], if the law has one.
+    pub(crate) fn rate_filter(&self) -> Option<f64> {
+        self.rate_filter
     }
 
     /// The gains over (φ, δ, φ̇, δ̇).
