@@ -74,3 +74,23 @@ def test_a_steer_map_is_the_benchmark_closed_loop_at_every_cell():
             assert abs(r.abscissa[j, i] - theirs) <= 1e-10 * max(1.0, abs(theirs)), (v, x)
     assert (r.stable == (r.abscissa < 0)).all()
     assert r.weave_speed == pytest.approx(4.2924, abs=1e-4)
+
+
+def test_a_gain_by_gain_steer_map_is_the_benchmark_closed_loop_at_its_speed():
+    r = twv.steer_map(
+        twv.Model("whipple"),
+        speed=2.5,
+        gain="k_phi_dot",
+        values="-10:30:5",
+        against="k_delta",
+        against_values="-20:10:4",
+        gains={"k_phi": 10.0},
+    )
+    assert r.abscissa.shape == (5, 4)
+    assert list(r.x) == list(r.against_values) and list(r.speeds) == [2.5]
+    for j, y in enumerate(r.values):
+        for i, x in enumerate(r.x):
+            theirs = benchmark_closed_loop(2.5, np.array([10.0, x, y, 0.0])).real.max()
+            assert abs(r.abscissa[j, i] - theirs) <= 1e-10 * max(1.0, abs(theirs)), (x, y)
+    unsteered = benchmark_closed_loop(2.5, np.zeros(4)).real.max()
+    assert r.unsteered_abscissa == pytest.approx(unsteered, abs=1e-10)

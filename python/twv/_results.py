@@ -400,20 +400,28 @@ def _axis_values(axis: dict[str, Any]) -> np.ndarray:
 
 
 class SteerMapResult(Result):
-    """The steered loop's stability over speed × one steer gain (`twv.steer_map`): `speeds`
-    [m/s], `values` of the gain, `abscissa` [value, speed] (the closed loop's largest eigenvalue
-    real part [1/s], NaN where not finite), `stable`, and nobody steering `weave_speed` and
-    `capsize_speed` (the JSON's own fields, read as every result's are)."""
+    """The steered loop's stability over speed × one steer gain (`twv.steer_map`), or at one
+    speed over one steer gain × another (`against`): `speeds` [m/s], `values` of the gain,
+    `against_values` of the second gain, `x` (the map's x axis: `against_values` or `speeds`),
+    `abscissa` [value, x] (the closed loop's largest eigenvalue real part [1/s], NaN where not
+    finite), `stable`, and nobody steering `weave_speed` and `capsize_speed` (or at one speed
+    `unsteered_abscissa`; the JSON's own fields, read as every result's are)."""
+
+    @property
+    def x(self) -> np.ndarray:
+        """The map's x axis: the second gain's values in a gain × gain map, else the speeds."""
+        key = "against_values" if self.raw["against"] is not None else "speeds"
+        return np.array(self.raw[key], dtype=float)
 
     @property
     def abscissa(self) -> np.ndarray:
-        """[value, speed]: max Re of the closed loop's eigenvalues [1/s]."""
+        """[value, x]: max Re of the closed loop's eigenvalues [1/s]."""
         flat = [np.nan if a is None else a for a in self.raw["abscissa"]]
-        return np.array(flat, dtype=float).reshape(len(self.raw["values"]), len(self.raw["speeds"]))
+        return np.array(flat, dtype=float).reshape(len(self.raw["values"]), len(self.x))
 
     @property
     def stable(self) -> np.ndarray:
-        """[value, speed]: every closed-loop eigenvalue has Re < 0."""
+        """[value, x]: every closed-loop eigenvalue has Re < 0."""
         return self.abscissa < 0
 
 

@@ -6,7 +6,7 @@ use nalgebra::{Complex, DMatrix};
 use serde::{Deserialize, Serialize};
 use twv_model::{Model, ModelInfo};
 
-use crate::control::steer::SteerSettings;
+use crate::control::steer::{filter_state, SteerSettings};
 use crate::control::{Plant, PITCH_STATES};
 use crate::error::{Error, Result};
 use crate::linear::steer::steer_closed_loop;
@@ -486,7 +486,7 @@ fn steer_report(
     // The filter's states are named after the rates they filter.
     let mut names = states.to_vec();
     if law.rate_filter.is_some() {
-        names.extend(lp.modes()[2..].iter().map(|m| format!("{m}_f")));
+        names.extend(lp.modes()[2..].iter().map(|m| filter_state(m)));
     }
     Ok(SteerReport {
         law: *law,

@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use twv_model::{Model, ModelInfo};
 
-use crate::control::steer::{FilteredSteer, SteerLaw, SteerSettings};
+use crate::control::steer::{filtered_rate, FilteredSteer, SteerLaw, SteerSettings};
 use crate::control::{simulate as integrate, RunEnd, RunSettings, Trajectory};
 use crate::error::{Error, Result};
 use crate::integrate::{ClosedLoop, OpenLoop};
@@ -280,7 +280,7 @@ fn result<const N: usize>(
         .map(|(t, x)| std::iter::once(*t).chain(x.iter().copied()).collect())
         .collect();
     let rate_unit = |name: &str| {
-        name.strip_suffix("_f")
+        filtered_rate(name)
             .and_then(|rate| resolved.unit_of(rate))
             .unwrap_or("")
     };

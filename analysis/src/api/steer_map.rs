@@ -1,9 +1,10 @@
 //! `twv steer-map`: where a steer-torque law balances a two-wheeler — the largest real part of
 //! the closed loop's eigenvalues (the vehicle maps' spectral abscissa) over speed × one steer
 //! gain, the other gains fixed, with the speeds at which nobody needs to steer (the open loop's
-//! self-stable band, from [`steady_motion`]) marked. Each cell is the 4 × 4 lean-and-steer loop
-//! of [`steer_loop`] at that speed closed by those gains: linear, exact, microseconds a cell,
-//! so a 1000 × 1000 map needs no cluster.
+//! self-stable band, from [`steady_motion`]) marked; or, at one speed, over one steer gain ×
+//! another (`against`). Each cell is the 4 × 4 lean-and-steer loop of [`steer_loop`] at that
+//! speed closed by those gains: linear, exact, microseconds a cell, so a 1000 × 1000 map needs
+//! no cluster.
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -11,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use super::steady::{steady_motion, SteadySettings};
 use super::steer::{check_rate_filter, csv_field, finite_gains, steer_loop};
 use crate::error::{Error, Result};
-use crate::linear::SteerGains;
+use crate::linear::{SteerGains, SteerLoop};
 use crate::model::ResolvedModel;
 use crate::output::Files;
 use crate::plot::{Figure, HeatMap, Mark};
@@ -30,14 +31,19 @@ pub(super) const BAND_STEP: f64 = 0.05;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct SteerMapSettings {
-    /// Speeds [m/s]. Default 0.5:10:96 (every 0.1 m/s).
+    /// Speeds [m/s]. Default 0.5:10:96 (every 0.1 m/s); one speed with `against`.
     pub speed: Axis,
     /// The gain the map varies: `k_phi`, `k_delta`, `k_phi_dot` or `k_delta_dot`. Default
     /// `k_phi_dot`, the lean-rate feedback of steering into the fall.
     pub gain: String,
     /// Its values [N m/rad or N m s/rad]. Default −20:60:81.
     pub values: Axis,
-    /// The other gains (the varied gain's entry is ignored). Default all 0.
+    /// A second gain for the map's x axis instead of speed: a gain × gain map at the one speed
+    /// of `speed`. Default `None` (the x axis is speed).
+    pub against: Option<String>,
+    /// Its values [N m/rad or N m s/rad]. Default −20:60:81.
+    pub against_values: Axis,
+    /// The other gains (the varied gains' entries are ignored). Default all 0.
     pub gains: SteerGains,
     /// τ of the law's filter on the rates [s]; `None` (default): unfiltered.
     pub rate_filter: Option<f64>,
@@ -57,6 +63,12 @@ impl Default for SteerMapSettings {
                 hi: 60.0,
                 n: 81,
             },
+            against: None,
+            against_values: Axis {
+                lo: -20.0,
+                hi: 60.0,
+                n: 81,
+            },
             gains: SteerGains::default(),
             rate_filter: None,
         }
@@ -66,7 +78,11 @@ impl Default for SteerMapSettings {
 impl SteerMapSettings {
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<()> {
-        for (name, a) in [("speed", &self.speed), ("values", &self.values)] {
+        for (name, a) in [
+            ("speed", &self.speed),
+            ("values", &self.values),
+            ("against_values", &self.against_values),
+        ] {
             if !(a.lo.is_finite() && a.hi.is_finite()) {
                 return Err(Error::input(
                     name,
@@ -96,26 +112,49 @@ impl SteerMapSettings {
             ));
         }
         self.gain_index()?;
+        if let Some(against) = &self.against {
+            gain_index("against", against)?;
+            if *against == self.gain {
+                return Err(Error::input(
+                    "against",
+                    format!("`{against}` is the map's gain already; choose another steer gain"),
+                ));
+            }
+            if self.speed.n != 1 {
+                return Err(Error::input(
+                    "speed",
+                    format!(
+                        "{} speeds: a gain × gain map (against {against}) is at one speed, \
+                         e.g. 3",
+                        self.speed.n
+                    ),
+                ));
+            }
+        }
         finite_gains(&self.gains)?;
         check_rate_filter(self.rate_filter)
     }
 
     /// The varied gain's position in [`SteerGains::NAMES`].
     fn gain_index(&self) -> Result<usize> {
-        SteerGains::NAMES
-            .iter()
-            .position(|n| *n == self.gain)
-            .ok_or_else(|| {
-                Error::input(
-                    "gain",
-                    format!(
-                        "`{}` is not a steer gain; the gains are {}",
-                        self.gain,
-                        SteerGains::NAMES.join(", ")
-                    ),
-                )
-            })
+        gain_index("gain", &self.gain)
     }
+}
+
+/// `gain`'s position in [`SteerGains::NAMES`]; the error names `field`.
+fn gain_index(field: &str, gain: &str) -> Result<usize> {
+    SteerGains::NAMES
+        .iter()
+        .position(|n| *n == gain)
+        .ok_or_else(|| {
+            Error::input(
+                field,
+                format!(
+                    "`{gain}` is not a steer gain; the gains are {}",
+                    SteerGains::NAMES.join(", ")
+                ),
+            )
+        })
 }
 
 /// How the map came out.
@@ -124,15 +163,18 @@ impl SteerMapSettings {
 pub enum SteerMapVerdict {
     /// Some cell's closed loop is stable.
     StableSomewhere,
-    /// No value of the gain stabilises the loop at any speed of the map.
+    /// No cell of the map stabilises the loop.
     NowhereStable,
 }
 
-/// The values of the gain that stabilise the loop at one speed.
+/// The values of the gain that stabilise the loop in one column of the map: at one speed, or
+/// at one value of the second gain.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct StabilisingRange {
     /// The speed [m/s].
     pub speed: f64,
+    /// The second gain's value in a gain × gain map (`None` in a speed × gain map).
+    pub against: Option<f64>,
     /// The smallest and largest stabilising value on the map's grid (`None`: none does).
     pub lo: Option<f64>,
     pub hi: Option<f64>,
@@ -153,12 +195,20 @@ pub struct SteerMapResult {
     pub gains: SteerGains,
     pub speeds: Vec<f64>,
     pub values: Vec<f64>,
-    /// max Re λ of the closed loop [1/s], row-major over (values, speeds): entry
-    /// `j · speeds.len() + i` is at (`speeds[i]`, `values[j]`); `None` where the eigenvalues are
-    /// not finite (gains too large for double precision).
+    /// The second gain of a gain × gain map and its values (the map's x axis, at the one speed
+    /// of `speeds`); `None` and empty in a speed × gain map.
+    pub against: Option<String>,
+    pub against_values: Vec<f64>,
+    /// max Re λ of the closed loop [1/s], row-major over (values, x) where x is `speeds`, or
+    /// `against_values` in a gain × gain map: entry `j · x.len() + i` is at (`x[i]`,
+    /// `values[j]`); `None` where the eigenvalues are not finite (gains too large for double
+    /// precision).
     pub abscissa: Vec<Option<f64>>,
-    /// Per speed, the values of the gain that stabilise.
+    /// Per column (speed, or value of the second gain), the values of the gain that stabilise.
     pub stabilising: Vec<StabilisingRange>,
+    /// The open loop's max Re λ [1/s] when the map has one speed (nobody steering; a map over
+    /// speeds has its self-stable band instead).
+    pub unsteered_abscissa: Option<f64>,
     /// Nobody steering: the speed intervals of the map's range where the bicycle is
     /// self-stable, and its weave and capsize speeds there (`None`: not within the range, or
     /// the map has one speed).
@@ -178,47 +228,98 @@ pub fn steer_map(
 ) -> Result<SteerMapResult> {
     s.validate()?;
     let j = s.gain_index()?;
+    let k = s
+        .against
+        .as_deref()
+        .map(|a| gain_index("against", a))
+        .transpose()?;
     let (speeds, values) = (s.speed.values(), s.values.values());
-    progress.start(speeds.len() as u64, "speeds");
-    // One column per speed, the speeds over rayon's threads (each column's cells are
-    // independent of the order: same bytes on any number of threads).
-    let columns: Vec<(Vec<String>, Vec<Option<f64>>)> = speeds
-        .par_iter()
-        .map(|&v| {
-            if progress.cancelled() {
-                return Err(Error::Interrupted);
-            }
-            let lp = steer_loop(model, v)?.with_rate_filter(s.rate_filter)?;
-            let column = values
-                .iter()
-                .map(|&x| {
-                    let mut row = s.gains.row();
-                    row[j] = x;
-                    lp.closed_loop_abscissa(&SteerGains::from_row(row))
-                })
-                .collect();
-            progress.advance(1);
-            Ok((lp.modes().to_vec(), column))
-        })
-        .collect::<Result<_>>()?;
-    let modes = columns.first().map_or(Vec::new(), |c| c.0.clone());
-    let columns: Vec<Vec<Option<f64>>> = columns.into_iter().map(|c| c.1).collect();
+    let against_values = if k.is_some() {
+        s.against_values.values()
+    } else {
+        Vec::new()
+    };
+    let closed = |v: f64| -> Result<SteerLoop> {
+        Ok(steer_loop(model, v)?.with_rate_filter(s.rate_filter)?)
+    };
+    // One column of cells: the varied gain's values, the second gain (if any) at `x`.
+    let column = |lp: &SteerLoop, x: Option<f64>| -> Vec<Option<f64>> {
+        values
+            .iter()
+            .map(|&y| {
+                let mut row = s.gains.row();
+                row[j] = y;
+                if let (Some(k), Some(x)) = (k, x) {
+                    row[k] = x;
+                }
+                lp.closed_loop_abscissa(&SteerGains::from_row(row))
+            })
+            .collect()
+    };
+    // The columns over rayon's threads (each column's cells are independent of the order: same
+    // bytes on any number of threads): one loop per speed, or one loop for every column of a
+    // gain × gain map.
+    let columns: Vec<Vec<Option<f64>>>;
+    let modes: Vec<String>;
+    if k.is_some() {
+        let lp = closed(speeds[0])?;
+        progress.start(against_values.len() as u64, "values");
+        columns = against_values
+            .par_iter()
+            .map(|&x| {
+                if progress.cancelled() {
+                    return Err(Error::Interrupted);
+                }
+                let c = column(&lp, Some(x));
+                progress.advance(1);
+                Ok(c)
+            })
+            .collect::<Result<_>>()?;
+        modes = lp.modes().to_vec();
+    } else {
+        progress.start(speeds.len() as u64, "speeds");
+        let built: Vec<(Vec<String>, Vec<Option<f64>>)> = speeds
+            .par_iter()
+            .map(|&v| {
+                if progress.cancelled() {
+                    return Err(Error::Interrupted);
+                }
+                let lp = closed(v)?;
+                let c = column(&lp, None);
+                progress.advance(1);
+                Ok((lp.modes().to_vec(), c))
+            })
+            .collect::<Result<_>>()?;
+        modes = built.first().map_or(Vec::new(), |c| c.0.clone());
+        columns = built.into_iter().map(|c| c.1).collect();
+    }
+    // At one speed, the open loop's own verdict (no band to search for).
+    let unsteered_abscissa = match speeds[..] {
+        [v] => closed(v)?.closed_loop_abscissa(&SteerGains::default()),
+        _ => None,
+    };
     let abscissa: Vec<Option<f64>> = (0..values.len())
         .flat_map(|jv| columns.iter().map(move |c| c[jv]))
         .collect();
     let stable = |a: &Option<f64>| a.is_some_and(|a| a < 0.0);
-    let stabilising = speeds
+    let at = |i: usize| match k {
+        Some(_) => (speeds[0], Some(against_values[i])),
+        None => (speeds[i], None),
+    };
+    let stabilising = columns
         .iter()
-        .zip(&columns)
-        .map(|(&speed, column)| {
+        .enumerate()
+        .map(|(i, column)| {
             let ok: Vec<f64> = values
                 .iter()
                 .zip(column)
                 .filter(|(_, a)| stable(a))
                 .map(|(x, _)| *x)
                 .collect();
+            let (speed, against) = at(i);
             StabilisingRange {
                 speed,
+                against,
                 lo: ok.first().copied(),
                 hi: ok.last().copied(),
                 count: ok.len(),
@@ -248,8 +349,11 @@ pub fn steer_map(
         gains: s.gains,
         speeds,
         values,
+        against: s.against.clone(),
+        against_values,
         abscissa,
         stabilising,
+        unsteered_abscissa,
         self_stable: band
             .as_ref()
             .map_or(Vec::new(), |b| b.stable_ranges.clone()),
@@ -270,23 +374,48 @@ fn short(x: f64) -> String {
     format!("{}", (x * 1e9).round() / 1e9)
 }
 
+/// A gain's unit.
+fn unit(gain: &str) -> &'static str {
+    if gain.ends_with("_dot") {
+        "N m s/rad"
+    } else {
+        "N m/rad"
+    }
+}
+
+/// `lo to hi` of a grid (one value alone).
+fn span(xs: &[f64]) -> String {
+    match (xs.first(), xs.last()) {
+        (Some(a), Some(b)) if a != b => format!("{} to {}", short(*a), short(*b)),
+        (Some(a), _) => short(*a),
+        _ => String::new(),
+    }
+}
+
 impl SteerMapResult {
-    /// The varied gain's unit.
-    fn unit(&self) -> &'static str {
-        if self.gain.ends_with("_dot") {
-            "N m s/rad"
-        } else {
-            "N m/rad"
+    /// The map's x axis: its name (`speed` or the second gain), values, and label with unit.
+    fn x_axis(&self) -> (&str, &[f64], String) {
+        match &self.against {
+            Some(a) => (a, &self.against_values, format!("{a} [{}]", unit(a))),
+            None => ("speed", &self.speeds, "speed v [m/s]".into()),
         }
     }
 
-    /// The other gains, as `k=v` (only those not 0).
+    /// The varied gains: `k_phi_dot`, or `k_phi_dot × k_phi`.
+    fn varied(&self) -> String {
+        match &self.against {
+            Some(a) => format!("{} × {a}", self.gain),
+            None => self.gain.clone(),
+        }
+    }
+
+    /// The fixed gains, as `k=v` (only those not 0).
     fn others(&self) -> String {
         let row = self.gains.row();
         let set: Vec<String> = SteerGains::NAMES
             .iter()
             .zip(row)
-            .filter(|(n, v)| **n != self.gain && *v != 0.0)
+            .filter(|(n, v)| **n != self.gain && Some(**n) != self.against.as_deref() && *v != 0.0)
             .map(|(n, v)| format!("{n}={v}"))
             .collect();
         if set.is_empty() {
@@ -296,21 +425,34 @@ impl SteerMapResult {
         }
     }
 
-    /// One row per cell: speed, gain value, abscissa (empty where none), stable.
+    /// One row per cell: speed, the second gain's value (in a gain × gain map), the gain's
+    /// value, abscissa (empty where none), stable.
     pub fn csv(&self) -> String {
-        let mut out = format!("speed,{},closed_loop_abscissa,stable\n", self.gain);
-        let n = self.speeds.len();
-        for (jv, x) in self.values.iter().enumerate() {
-            for (i, v) in self.speeds.iter().enumerate() {
-                let a = self.abscissa[jv * n + i];
-                out += &format!("{v},{x},{},{}\n", csv_field(a), a.is_some_and(|a| a < 0.0));
+        let (_, xs, _) = self.x_axis();
+        let against = self
+            .against
+            .as_ref()
+            .map_or(String::new(), |a| format!("{a},"));
+        let mut out = format!("speed,{against}{},closed_loop_abscissa,stable\n", self.gain);
+        for (jv, y) in self.values.iter().enumerate() {
+            for (i, x) in xs.iter().enumerate() {
+                let a = self.abscissa[jv * xs.len() + i];
+                let (speed, against) = match self.against {
+                    Some(_) => (self.speeds[0], format!("{x},")),
+                    None => (*x, String::new()),
+                };
+                out += &format!(
+                    "{speed},{against}{y},{},{}\n",
+                    csv_field(a),
+                    a.is_some_and(|a| a < 0.0)
+                );
             }
         }
         out
     }
 
-    /// The map: abscissa over (speed, gain) with the stability boundary, and the weave and
-    /// capsize speeds marked.
+    /// The map: abscissa over (speed or the second gain, gain) with the stability boundary,
+    /// and the weave and capsize speeds marked on a speed axis.
     pub fn figure(&self) -> Figure {
         let values: Vec<f64> = self
             .abscissa
@@ -330,17 +472,22 @@ impl SteerMapResult {
                 label: format!(" capsize {c:.2}"),
             });
         }
+        let (_, xs, x_label) = self.x_axis();
+        let at = match self.against {
+            Some(_) => format!(" at {} m/s", short(self.speeds[0])),
+            None => String::new(),
+        };
         Figure::Heat(HeatMap {
             title: format!(
-                "{} steered by {} ({})",
+                "{}{at} steered by {} ({})",
                 self.model,
-                self.gain,
+                self.varied(),
                 self.others()
             ),
-            x_label: "speed v [m/s]".into(),
-            y_label: format!("{} [{}]", self.gain, self.unit()),
+            x_label,
+            y_label: format!("{} [{}]", self.gain, unit(&self.gain)),
             value_label: "max Re λ of the closed loop [1/s]".into(),
-            xs: self.speeds.clone(),
+            xs: xs.to_vec(),
             ys: self.values.clone(),
             missing: self
                 .abscissa
@@ -365,58 +512,85 @@ impl SteerMapResult {
     }
 
     /// What was mapped, how much of it is stable, where some value stabilises, and the band
-    /// where nobody needs to steer.
+    /// (or, at one speed, the open loop) where nobody needs to steer.
     pub fn summary(&self) -> String {
-        let (n, m) = (self.speeds.len(), self.values.len());
-        let span = |xs: &[f64]| match (xs.first(), xs.last()) {
-            (Some(a), Some(b)) if a != b => format!("{} to {}", short(*a), short(*b)),
-            (Some(a), _) => short(*a),
-            _ => String::new(),
+        let (x_name, xs, _) = self.x_axis();
+        let (n, m) = (xs.len(), self.values.len());
+        let (at, x_span, of) = match &self.against {
+            Some(a) => (
+                format!(" at {} m/s", short(self.speeds[0])),
+                format!("{n} values of {a} {} {}", span(xs), unit(a)),
+                format!("of {} ", self.gain),
+            ),
+            None => (
+                String::new(),
+                format!("{n} speeds {} m/s", span(xs)),
+                String::new(),
+            ),
         };
         let mut out = format!(
-            "{} steered by {} over {n} speeds {} m/s × {m} values {} {} ({}; {}): stable \
-             (max Re λ < 0) in {} of {} cells\n",
+            "{}{at} steered by {} over {x_span} × {m} values {of}{} {} ({}; {}): stable (max \
+             Re λ < 0) in {} of {} cells\n",
             self.model,
-            self.gain,
-            span(&self.speeds),
+            self.varied(),
             span(&self.values),
-            self.unit(),
+            unit(&self.gain),
             self.others(),
             self.params,
             self.stable_cells,
             n * m
         );
-        let helped: Vec<f64> = self
-            .stabilising
+        let helped: Vec<f64> = xs
             .iter()
-            .filter(|r| r.count > 0)
-            .map(|r| r.speed)
+            .zip(&self.stabilising)
+            .filter(|(_, r)| r.count > 0)
+            .map(|(x, _)| *x)
             .collect();
+        let things = if self.against.is_some() {
+            format!("values of {x_name}")
+        } else {
+            "speeds".into()
+        };
+        let x_unit = if self.against.is_some() {
+            unit(x_name)
+        } else {
+            "m/s"
+        };
         out += &match (helped.first(), helped.last()) {
             (Some(a), Some(b)) => format!(
-                "  some value of {} stabilises it at {} of {n} speeds, from {} to {} m/s\n",
+                "  some value of {} stabilises it at {} of {n} {things}, from {} to {} {x_unit}\n",
                 self.gain,
                 helped.len(),
                 short(*a),
                 short(*b)
             ),
             _ => format!(
-                "  no value of {} on the map stabilises it at any speed\n",
+                "  no value of {} on the map stabilises it at any of its {things}\n",
                 self.gain
             ),
         };
-        out += &if self.self_stable.is_empty() {
-            "  nobody steering, it is self-stable at no speed of the map\n".to_string()
-        } else {
-            let bands: Vec<String> = self
-                .self_stable
-                .iter()
-                .map(|(a, b)| format!("{a:.4}–{b:.4}"))
-                .collect();
-            format!(
-                "  nobody steering, it is self-stable at {} m/s (dashed lines on the map)\n",
-                bands.join(", ")
-            )
+        let one_speed = self.speeds.len() == 1;
+        out += &match (one_speed, self.unsteered_abscissa) {
+            (true, Some(a)) => format!(
+                "  nobody steering, at {} m/s it is {} (max Re λ = {a:.4} 1/s)\n",
+                short(self.speeds[0]),
+                if a < 0.0 { "self-stable" } else { "unstable" }
+            ),
+            (true, None) => "  nobody steering, its eigenvalues are not finite\n".into(),
+            (false, _) if self.self_stable.is_empty() => {
+                "  nobody steering, it is self-stable at no speed of the map\n".to_string()
+            }
+            (false, _) => {
+                let bands: Vec<String> = self
+                    .self_stable
+                    .iter()
+                    .map(|(a, b)| format!("{a:.4}–{b:.4}"))
+                    .collect();
+                format!(
+                    "  nobody steering, it is self-stable at {} m/s (dashed lines on the map)\n",
+                    bands.join(", ")
+                )
+            }
         };
         out
     }

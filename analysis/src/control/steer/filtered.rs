@@ -10,7 +10,7 @@
 
 use twv_model::Model;
 
-use super::SteerLaw;
+use super::{filter_state, SteerLaw};
 use crate::control::ControlError;
 use crate::integrate::VectorField;
 
@@ -75,10 +75,10 @@ where
         })
     }
 
-    /// Names of the filter's two states: the rates' names with `_f`.
+    /// Names of the filter's two states, after the rates they carry ([`filter_state`]).
     pub fn filter_states(states: &[&str], law: &SteerLaw<NX, NU>) -> [String; 2] {
         let m = law.modes();
-        [format!("{}_f", states[m[2]]), format!("{}_f", states[m[3]])]
+        [filter_state(states[m[2]]), filter_state(states[m[3]])]
     }
 
     /// The law's readings at the augmented state: φ, δ and the filtered rates.

@@ -77,6 +77,20 @@ impl SteerSettings {
 /// The longest rate filter [s]: a lag of a minute is no longer a rate the law reads.
 pub const MAX_RATE_FILTER: f64 = 60.0;
 
+/// What a rate filter state's name adds to the rate's: the filtered lean rate of `w_phi` is
+/// `w_phi_f`.
+const FILTERED: &str = "_f";
+
+/// The name of the filter state that carries `rate` through the law's rate filter.
+pub fn filter_state(rate: &str) -> String {
+    format!("{rate}{FILTERED}")
+}
+
+/// The rate that the filter state `name` carries (`None`: not a filter state's name).
+pub fn filtered_rate(name: &str) -> Option<&str> {
+    name.strip_suffix(FILTERED)
+}
+
 /// The index of the steer torque among `inputs` of `model`, or why it has none.
 pub fn steer_input(model: &str, inputs: &[&str]) -> Result<usize> {
     inputs
