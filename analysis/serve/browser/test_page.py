@@ -23,6 +23,7 @@ import pytest
 from selenium import webdriver
 from selenium.webdriver.chrome.service import Service
 from selenium.webdriver.common.action_chains import ActionChains
+from selenium.webdriver.common.keys import Keys
 
 ROOT = Path(__file__).resolve().parents[3]
 TWV = Path(os.environ.get("TWV_BIN", ROOT / "target" / "debug" / "twv"))
@@ -363,6 +364,7 @@ def bicycle_state(driver) -> dict:
         const t = window.twv;
         return {
           updates: t.updates, errors: t.errors, gains: t.gains, speed: t.speed,
+          filter: t.filter,
           path: location.pathname,
           push: Number(document.getElementById('push').value),
           t_end: Number(document.getElementById('t-end').value),
@@ -391,6 +393,8 @@ def bicycle_against_cli(driver, tmp: Path) -> dict:
         "--steer-gains",
         law,
     )
+    if state["filter"] is not None:
+        common += ("--steer-filter", repr(state["filter"]))
     out = twv("linearize", "--json", *common)
     assert out.returncode in (0, 3), out.stderr
     steer = json.loads(out.stdout)["steer"]
@@ -451,5 +455,30 @@ def test_the_bicycle_page_steers_as_the_cli_does(bicycle_server, browser, tmp_pa
     after = bicycle_against_cli(browser, tmp_path / "after")
     assert after["verdict"] == "unstable", after["gains"]
     assert after["lean"] != before["lean"]
+
+
+def test_the_bicycle_pages_rate_filter_is_the_clis(bicycle_server, browser, tmp_path):
+    """The lean-rate feedback that balances the bicycle at 3 m/s, read through a 50 ms rate
+    filter, no longer does: the page's verdict flips with the CLI's (`--steer-filter 0.05`), and
+    emptying the field reads the rates directly again."""
+    browser.get(bicycle_server)
+    wait_for(browser, "return window.twv && window.twv.updates >= 1")
+    before = bicycle_against_cli(browser, tmp_path / "direct")
+    assert before["filter"] is None and before["verdict"] == "stable", before
+    field = browser.find_element("id", "filter")
+    updates = before["updates"]
+    field.send_keys("50", Keys.TAB)
+    wait_for(
+        browser, f"return window.twv.updates > {updates} && window.twv.filter === 0.05"
+    )
+    lagged = bicycle_against_cli(browser, tmp_path / "lagged")
+    assert lagged["verdict"] == "unstable", lagged
+    updates = lagged["updates"]
+    field.send_keys(Keys.BACKSPACE, Keys.BACKSPACE, Keys.TAB)
+    wait_for(
+        browser, f"return window.twv.updates > {updates} && window.twv.filter === null"
+    )
+    again = bicycle_against_cli(browser, tmp_path / "again")
+    assert again["verdict"] == "stable" and again["lean"] == before["lean"]
     ARTEFACTS.mkdir(parents=True, exist_ok=True)
     browser.save_screenshot(str(ARTEFACTS / "serve-bicycle.png"))

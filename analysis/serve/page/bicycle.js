@@ -7,6 +7,8 @@
 const GAINS = ["k_phi", "k_delta", "k_phi_dot", "k_delta_dot"];
 const steerGains = () => Object.fromEntries(GAINS.map((k) => [k, num(k)]));
 const speed = () => num("speed");
+// The rate filter's τ [s] from the field in ms; null (none) when empty.
+const rateFilter = () => ($("filter").value.trim() === "" ? null : num("filter") / 1000);
 // The eigenvalues against speed are drawn over this range [m/s] (LO:HI:STEP, the steady job's).
 const SPEEDS = "0:10:0.02";
 
@@ -94,17 +96,17 @@ async function update() {
   const generation = ++twv.generation;
   const g = steerGains(); // what this update draws (the sliders may move while it runs)
   const v = speed();
+  const tau = rateFilter();
   const body = (options) => ({ params, options });
+  const law = { speed: v, steer_gains: g, steer_filter: tau };
   const jobs = {
-    ride: api(
-      "/api/ride",
-      body({ speed: v, steer_gains: g, perturb: { w_phi: num("push") }, t_end: num("t-end") }),
-    ),
-    loop: api("/api/linearize", body({ speed: v, steer_gains: g })),
+    ride: api("/api/ride", body({ ...law, perturb: { w_phi: num("push") }, t_end: num("t-end") })),
+    loop: api("/api/linearize", body(law)),
   };
   if (!(await settle(generation, jobs, { ride: showRide, loop: showLoop }))) return; // a newer update is on its way
   twv.gains = g;
   twv.speed = v;
+  twv.filter = tau;
   twv.updates += 1;
 }
 
@@ -123,7 +125,7 @@ async function tune() {
   const status = $("tune-status");
   status.textContent = "tuning…";
   try {
-    const options = { speed: String(speed()), spec: $("spec").value };
+    const options = { speed: String(speed()), spec: $("spec").value, rate_filter: rateFilter() };
     const answer = await api("/api/steer", { params, options });
     const p = answer.result.points[0];
     const c = p.certificate;
@@ -163,7 +165,7 @@ async function start() {
   });
   setupBikeCharts();
   for (const id of [...GAINS, "speed"]) $(id).addEventListener("input", schedule);
-  for (const id of ["push", "t-end"]) $(id).addEventListener("change", schedule);
+  for (const id of ["push", "t-end", "filter"]) $(id).addEventListener("change", schedule);
   $("tune").addEventListener("click", tune);
   refreshSteady();
   schedule();

@@ -397,11 +397,18 @@ impl RideResult {
                 self.peak
             ),
             RideVerdict::Fell => match self.end {
-                RunEnd::Fell { t, phi } => crate::error::readable_numbers(&format!(
-                    "FELL: |{}| passed {} at t = {t:.3} s ({phi:+.3})",
-                    self.watch,
-                    self.run.fall_angle.unwrap_or(f64::INFINITY)
-                )),
+                RunEnd::Fell { t, phi, blew_up } => {
+                    let passed = format!(
+                        "FELL: |{}| passed {}",
+                        self.watch,
+                        self.run.fall_angle_text()
+                    );
+                    if blew_up {
+                        format!("{passed}, and the integration then broke down, by t = {t:.3} s")
+                    } else {
+                        format!("{passed} at t = {t:.3} s ({phi:+.3} rad)")
+                    }
+                }
                 RunEnd::Completed => "FELL".to_string(),
             },
             RideVerdict::Undisturbed => format!("{} stayed at zero: undisturbed", self.watch),

@@ -88,6 +88,13 @@ impl RunSettings {
         }
         Ok(())
     }
+
+    /// The fall angle as a person reads it: `1.5708 rad (90°)`, `none` when not checked.
+    pub fn fall_angle_text(&self) -> String {
+        self.fall_angle.map_or("none".into(), |a| {
+            format!("{a:.4} rad ({:.0}°)", a.to_degrees())
+        })
+    }
 }
 
 /// How a run ended.
@@ -99,10 +106,13 @@ pub enum RunEnd {
     /// |Φ| passed the fall angle at the sample time `t` (or the state blew up, from time `t`,
     /// after passing it between two samples).
     Fell {
-        /// Time of the first sample past the fall angle [s].
+        /// Time of the first sample past the fall angle [s] (or of the blow-up).
         t: f64,
-        /// Φ there [rad].
+        /// Φ there [rad] (or at the last finite state before the blow-up).
         phi: f64,
+        /// Whether the state blew up after |Φ| passed the fall angle between two samples: then
+        /// `phi` is where the integration broke down, not an angle the model reached.
+        blew_up: bool,
     },
 }
 
@@ -195,7 +205,11 @@ fn sample<S: Stepper<N, 0>, const N: usize>(
                     .zip(x.get(phi))
                     .is_some_and(|(limit, p)| p.abs() > limit) =>
             {
-                traj.end = RunEnd::Fell { t, phi: x[phi] };
+                traj.end = RunEnd::Fell {
+                    t,
+                    phi: x[phi],
+                    blew_up: true,
+                };
                 break;
             }
             Err(e) => return Err(e.into()),
@@ -211,7 +225,11 @@ fn sample<S: Stepper<N, 0>, const N: usize>(
         traj.x.push(x);
         if let Some(limit) = run.fall_angle {
             if x[phi].abs() > limit {
-                traj.end = RunEnd::Fell { t, phi: x[phi] };
+                traj.end = RunEnd::Fell {
+                    t,
+                    phi: x[phi],
+                    blew_up: false,
+                };
                 break;
             }
         }
