@@ -256,43 +256,43 @@ pub fn steer_map(
             })
             .collect()
     };
+    // The map's columns: (speed, the second gain's value) of each. A gain × gain map closes one
+    // loop for all of them, a map over speed one per speed.
+    let at: Vec<(f64, Option<f64>)> = match k {
+        Some(_) => against_values
+            .iter()
+            .map(|&x| (speeds[0], Some(x)))
+            .collect(),
+        None => speeds.iter().map(|&v| (v, None)).collect(),
+    };
+    let shared = k.map(|_| closed(speeds[0])).transpose()?;
+    progress.start(
+        at.len() as u64,
+        if k.is_some() { "values" } else { "speeds" },
+    );
     // The columns over rayon's threads (each column's cells are independent of the order: same
-    // bytes on any number of threads): one loop per speed, or one loop for every column of a
-    // gain × gain map.
-    let columns: Vec<Vec<Option<f64>>>;
-    let modes: Vec<String>;
-    if k.is_some() {
-        let lp = closed(speeds[0])?;
-        progress.start(against_values.len() as u64, "values");
-        columns = against_values
-            .par_iter()
-            .map(|&x| {
-                if progress.cancelled() {
-                    return Err(Error::Interrupted);
+    // bytes on any number of threads).
+    let built: Vec<(Vec<String>, Vec<Option<f64>>)> = at
+        .par_iter()
+        .map(|&(v, x)| {
+            if progress.cancelled() {
+                return Err(Error::Interrupted);
+            }
+            let own;
+            let lp = match &shared {
+                Some(lp) => lp,
+                None => {
+                    own = closed(v)?;
+                    &own
                 }
-                let c = column(&lp, Some(x));
-                progress.advance(1);
-                Ok(c)
-            })
-            .collect::<Result<_>>()?;
-        modes = lp.modes().to_vec();
-    } else {
-        progress.start(speeds.len() as u64, "speeds");
-        let built: Vec<(Vec<String>, Vec<Option<f64>>)> = speeds
-            .par_iter()
-            .map(|&v| {
-                if progress.cancelled() {
-                    return Err(Error::Interrupted);
-                }
-                let lp = closed(v)?;
-                let c = column(&lp, None);
-                progress.advance(1);
-                Ok((lp.modes().to_vec(), c))
-            })
-            .collect::<Result<_>>()?;
-        modes = built.first().map_or(Vec::new(), |c| c.0.clone());
-        columns = built.into_iter().map(|c| c.1).collect();
-    }
+            };
+            let c = column(lp, x);
+            progress.advance(1);
+            Ok((lp.modes().to_vec(), c))
+        })
+        .collect::<Result<_>>()?;
+    let modes = built.first().map_or(Vec::new(), |c| c.0.clone());
+    let columns: Vec<Vec<Option<f64>>> = built.into_iter().map(|c| c.1).collect();
     // At one speed, the open loop's own verdict (no band to search for).
     let unsteered_abscissa = match speeds[..] {
         [v] => closed(v)?.closed_loop_abscissa(&SteerGains::default()),
@@ -302,10 +302,6 @@ pub fn steer_map(
         .flat_map(|jv| columns.iter().map(move |c| c[jv]))
         .collect();
     let stable = |a: &Option<f64>| a.is_some_and(|a| a < 0.0);
-    let at = |i: usize| match k {
-        Some(_) => (speeds[0], Some(against_values[i])),
-        None => (speeds[i], None),
-    };
     let stabilising = columns
         .iter()
         .enumerate()
@@ -316,7 +312,7 @@ pub fn steer_map(
                 .filter(|(_, a)| stable(a))
                 .map(|(x, _)| *x)
                 .collect();
-            let (speed, against) = at(i);
+            let (speed, against) = at[i];
             StabilisingRange {
                 speed,
                 against,
