@@ -396,20 +396,9 @@ impl RideResult {
                 RIDE_DECAY,
                 self.peak
             ),
-            RideVerdict::Fell => match self.end {
-                RunEnd::Fell { t, phi, blew_up } => {
-                    let passed = format!(
-                        "FELL: |{}| passed {}",
-                        self.watch,
-                        self.run.fall_angle_text()
-                    );
-                    if blew_up {
-                        format!("{passed}, and the integration then broke down, by t = {t:.3} s")
-                    } else {
-                        format!("{passed} at t = {t:.3} s ({phi:+.3} rad)")
-                    }
-                }
-                RunEnd::Completed => "FELL".to_string(),
+            RideVerdict::Fell => match self.end.fall_text(&self.watch, &self.run) {
+                Some(how) => format!("FELL: {how}"),
+                None => "FELL".to_string(),
             },
             RideVerdict::Undisturbed => format!("{} stayed at zero: undisturbed", self.watch),
         };

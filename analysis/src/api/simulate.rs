@@ -477,20 +477,8 @@ impl SimResult {
                 Recovery::Fell => "FELL OVER".to_string(),
             }
         );
-        match self.end {
-            RunEnd::Fell {
-                t, blew_up: true, ..
-            } => {
-                s += &format!(
-                    "  fell over: |Φ| passed {}, and the integration then broke down, by t = \
-                     {t:.3} s\n",
-                    self.run.fall_angle_text()
-                )
-            }
-            RunEnd::Fell { t, phi, .. } => {
-                s += &format!("  fell over at t = {t:.3} s (Φ = {phi:.3} rad)\n")
-            }
-            RunEnd::Completed => {}
+        if let Some(how) = self.end.fall_text("Φ", &self.run) {
+            s += &format!("  fell over: {how}\n");
         }
         s += &format!(
             "  Φ: settling (2 %) {}, overshoot {}, IAE {:.4} rad s, ISE {:.4e} rad² s, final {:+.3e} rad\n",

@@ -256,8 +256,8 @@ pub fn steer_map(
             })
             .collect()
     };
-    // The map's columns: (speed, the second gain's value) of each. A gain × gain map closes one
-    // loop for all of them, a map over speed one per speed.
+    // The map's columns: (speed, the second gain's value) of each. A map at one speed (every
+    // gain × gain map) closes one loop for all of them, a map over speeds one per speed.
     let at: Vec<(f64, Option<f64>)> = match k {
         Some(_) => against_values
             .iter()
@@ -265,7 +265,10 @@ pub fn steer_map(
             .collect(),
         None => speeds.iter().map(|&v| (v, None)).collect(),
     };
-    let shared = k.map(|_| closed(speeds[0])).transpose()?;
+    let shared = match speeds[..] {
+        [v] => Some(closed(v)?),
+        _ => None,
+    };
     progress.start(
         at.len() as u64,
         if k.is_some() { "values" } else { "speeds" },
@@ -294,10 +297,9 @@ pub fn steer_map(
     let modes = built.first().map_or(Vec::new(), |c| c.0.clone());
     let columns: Vec<Vec<Option<f64>>> = built.into_iter().map(|c| c.1).collect();
     // At one speed, the open loop's own verdict (no band to search for).
-    let unsteered_abscissa = match speeds[..] {
-        [v] => closed(v)?.closed_loop_abscissa(&SteerGains::default()),
-        _ => None,
-    };
+    let unsteered_abscissa = shared
+        .as_ref()
+        .and_then(|lp| lp.closed_loop_abscissa(&SteerGains::default()));
     let abscissa: Vec<Option<f64>> = (0..values.len())
         .flat_map(|jv| columns.iter().map(move |c| c[jv]))
         .collect();
@@ -389,11 +391,25 @@ fn span(xs: &[f64]) -> String {
 }
 
 impl SteerMapResult {
-    /// The map's x axis: its name (`speed` or the second gain), values, and label with unit.
-    fn x_axis(&self) -> (&str, &[f64], String) {
+    /// The map's x axis: its values, what they are (`speeds`, `values of k_phi`), their unit
+    /// and the axis label.
+    fn x_axis(&self) -> (&[f64], String, &'static str, String) {
         match &self.against {
-            Some(a) => (a, &self.against_values, format!("{a} [{}]", unit(a))),
-            None => ("speed", &self.speeds, "speed v [m/s]".into()),
+            Some(a) => (
+                &self.against_values,
+                format!("values of {a}"),
+                unit(a),
+                format!("{a} [{}]", unit(a)),
+            ),
+            None => (&self.speeds, "speeds".into(), "m/s", "speed v [m/s]".into()),
+        }
+    }
+
+    /// ` at 3 m/s` for a gain × gain map, empty for a map over speeds.
+    fn at_speed(&self) -> String {
+        match self.against {
+            Some(_) => format!(" at {} m/s", short(self.speeds[0])),
+            None => String::new(),
         }
     }
 
@@ -424,7 +440,7 @@ impl SteerMapResult {
     /// One row per cell: speed, the second gain's value (in a gain × gain map), the gain's
     /// value, abscissa (empty where none), stable.
     pub fn csv(&self) -> String {
-        let (_, xs, _) = self.x_axis();
+        let (xs, ..) = self.x_axis();
         let against = self
             .against
             .as_ref()
@@ -468,15 +484,12 @@ impl SteerMapResult {
                 label: format!(" capsize {c:.2}"),
             });
         }
-        let (_, xs, x_label) = self.x_axis();
-        let at = match self.against {
-            Some(_) => format!(" at {} m/s", short(self.speeds[0])),
-            None => String::new(),
-        };
+        let (xs, _, _, x_label) = self.x_axis();
         Figure::Heat(HeatMap {
             title: format!(
-                "{}{at} steered by {} ({})",
+                "{}{} steered by {} ({})",
                 self.model,
+                self.at_speed(),
                 self.varied(),
                 self.others()
             ),
@@ -510,25 +523,19 @@ impl SteerMapResult {
     /// What was mapped, how much of it is stable, where some value stabilises, and the band
     /// (or, at one speed, the open loop) where nobody needs to steer.
     pub fn summary(&self) -> String {
-        let (x_name, xs, _) = self.x_axis();
+        let (xs, things, x_unit, _) = self.x_axis();
         let (n, m) = (xs.len(), self.values.len());
-        let (at, x_span, of) = match &self.against {
-            Some(a) => (
-                format!(" at {} m/s", short(self.speeds[0])),
-                format!("{n} values of {a} {} {}", span(xs), unit(a)),
-                format!("of {} ", self.gain),
-            ),
-            None => (
-                String::new(),
-                format!("{n} speeds {} m/s", span(xs)),
-                String::new(),
-            ),
+        let of = match self.against {
+            Some(_) => format!("of {} ", self.gain),
+            None => String::new(),
         };
         let mut out = format!(
-            "{}{at} steered by {} over {x_span} × {m} values {of}{} {} ({}; {}): stable (max \
-             Re λ < 0) in {} of {} cells\n",
+            "{}{} steered by {} over {n} {things} {} {x_unit} × {m} values {of}{} {} ({}; {}): \
+             stable (max Re λ < 0) in {} of {} cells\n",
             self.model,
+            self.at_speed(),
             self.varied(),
+            span(xs),
             span(&self.values),
             unit(&self.gain),
             self.others(),
@@ -542,16 +549,6 @@ impl SteerMapResult {
             .filter(|(_, r)| r.count > 0)
             .map(|(x, _)| *x)
             .collect();
-        let things = if self.against.is_some() {
-            format!("values of {x_name}")
-        } else {
-            "speeds".into()
-        };
-        let x_unit = if self.against.is_some() {
-            unit(x_name)
-        } else {
-            "m/s"
-        };
         out += &match (helped.first(), helped.last()) {
             (Some(a), Some(b)) => format!(
                 "  some value of {} stabilises it at {} of {n} {things}, from {} to {} {x_unit}\n",

@@ -116,6 +116,22 @@ pub enum RunEnd {
     },
 }
 
+impl RunEnd {
+    /// How the run fell, for a summary: `|phi| passed 1.5708 rad (90°) at t = 1.470 s (-0.503
+    /// rad)`, or that the integration broke down after the fall; `None` if it did not fall.
+    pub fn fall_text(&self, watch: &str, run: &RunSettings) -> Option<String> {
+        let RunEnd::Fell { t, phi, blew_up } = *self else {
+            return None;
+        };
+        let passed = format!("|{watch}| passed {}", run.fall_angle_text());
+        Some(if blew_up {
+            format!("{passed}, and the integration then broke down, by t = {t:.3} s")
+        } else {
+            format!("{passed} at t = {t:.3} s ({phi:+.3} rad)")
+        })
+    }
+}
+
 /// Samples of one run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trajectory<const N: usize> {

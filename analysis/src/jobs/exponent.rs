@@ -85,12 +85,11 @@ impl ExponentSettings {
     /// The one-point map these settings are.
     fn map(&self) -> SweepSettings {
         let g = self.controller.pitch.gains;
-        let one = |v: f64| Axis { lo: v, hi: v, n: 1 };
         SweepSettings {
             grid: Grid {
-                kp: one(g.kp),
-                kd: one(g.kd),
-                ki: (g.ki != 0.0).then(|| one(g.ki)),
+                kp: Axis::point(g.kp),
+                kd: Axis::point(g.kd),
+                ki: (g.ki != 0.0).then(|| Axis::point(g.ki)),
                 params: Vec::new(),
             },
             metric: Metric::MaxLyapunov,

@@ -16,7 +16,10 @@ use crate::progress::Progress;
 use crate::sweep::Axis;
 
 /// The choices of `against`: none (a map over speed) or a second steer gain.
-const AGAINST: [&str; 5] = ["none", "k_phi", "k_delta", "k_phi_dot", "k_delta_dot"];
+const AGAINST: [&str; 5] = {
+    let k = SteerGains::NAMES;
+    ["none", k[0], k[1], k[2], k[3]]
+};
 
 /// The speeds: an axis A:B:N, or one speed (a number) for a gain × gain map.
 fn speeds(v: &Value) -> Result<Axis> {
@@ -26,7 +29,7 @@ fn speeds(v: &Value) -> Result<Axis> {
         _ => None,
     };
     match one {
-        Some(x) => Ok(Axis { lo: x, hi: x, n: 1 }),
+        Some(x) => Ok(Axis::point(x)),
         None => axis("speed", v),
     }
 }

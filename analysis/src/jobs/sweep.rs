@@ -137,9 +137,8 @@ impl Job for Sweep {
                 |s: &mut SweepSettings, v| {
                     s.grid.params = param_axes(v)?;
                     if !s.grid.params.is_empty() {
-                        let point = |v: f64| Axis { lo: v, hi: v, n: 1 };
-                        s.grid.kp = point(STUDY_PD.kp);
-                        s.grid.kd = point(STUDY_PD.kd);
+                        s.grid.kp = Axis::point(STUDY_PD.kp);
+                        s.grid.kd = Axis::point(STUDY_PD.kd);
                     }
                     Ok(())
                 },

@@ -21,6 +21,11 @@ pub struct Axis {
 }
 
 impl Axis {
+    /// The axis of one value.
+    pub fn point(v: f64) -> Self {
+        Self { lo: v, hi: v, n: 1 }
+    }
+
     /// Parses `A:B:N` for option `--{name}`.
     pub fn parse(name: &'static str, text: &str) -> Result<Self, SweepError> {
         let bad = |reason: &str| SweepError::Axis {
