@@ -94,3 +94,12 @@ def test_a_gain_by_gain_steer_map_is_the_benchmark_closed_loop_at_its_speed():
             assert abs(r.abscissa[j, i] - theirs) <= 1e-10 * max(1.0, abs(theirs)), (x, y)
     unsteered = benchmark_closed_loop(2.5, np.zeros(4)).real.max()
     assert r.unsteered_abscissa == pytest.approx(unsteered, abs=1e-10)
+
+
+@pytest.mark.parametrize(("v", "verdict"), [(2.5, "unstable"), (5.0, "self-stable")])
+def test_a_one_speed_maps_unsteered_verdict_follows_the_self_stable_band(v, verdict):
+    """Below the weave speed (4.29 m/s) the unsteered bicycle is unstable, inside the band
+    (to 6.02 m/s) self-stable: the summary's word follows the open loop's abscissa."""
+    r = twv.steer_map(twv.Model("whipple"), speed=v, values="0:10:3")
+    assert (r.unsteered_abscissa < 0) == (verdict == "self-stable")
+    assert f"at {v:g} m/s it is {verdict} " in r.summary, r.summary
