@@ -5,8 +5,9 @@ use std::path::PathBuf;
 /// Why a sweep could not be set up, written or merged.
 #[derive(Debug, thiserror::Error)]
 pub enum SweepError {
-    /// A `--kp/--kd/--ki A:B:N` axis that does not parse or is empty.
-    #[error("--{axis} `{text}`: {reason} (want A:B:N, e.g. 0:8000:100)")]
+    /// A `--kp/--kd/--ki A:B:N` axis that does not parse or is empty (named by its flag, so
+    /// `against_values` is `--against-values`).
+    #[error("--{} `{text}`: {reason} (want A:B:N, e.g. 0:8000:100)", .axis.replace('_', "-"))]
     Axis {
         axis: &'static str,
         text: String,

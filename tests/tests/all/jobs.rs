@@ -154,6 +154,11 @@ fn bad_options_are_refused_naming_them() {
     assert!(refused(&[("v_cruise", json!(1))]).contains("maneuver"));
     assert!(refused(&[("t_end", json!("-1"))]).contains("t_end"));
     assert!(refused(&[("kd", json!("nan"))]).contains("Kd"));
+    // An axis named by its flag, dashes and all.
+    let map = jobs::find("steer_map").unwrap();
+    let given = [("against_values".to_string(), json!("1:0:5"))];
+    let e = map.prepare_options(None, &given).err().unwrap().to_string();
+    assert!(e.starts_with("--against-values `1:0:5`: need A < B"), "{e}");
 }
 
 #[test]
