@@ -19,7 +19,7 @@ pub const TRAILER_MAGIC: &[u8; 8] = b"TWVBNDL1";
 /// The bundle's file name in an FMU's `resources/` folder.
 pub const FMU_RESOURCE: &str = "bundle.json";
 
-/// The largest bundle a reader accepts (the Whipple bicycle's IR is 2.6 MB).
+/// The largest bundle a reader accepts (the Whipple bicycle's IR is 1.4 MB).
 pub const MAX_BUNDLE_BYTES: u64 = 256 << 20;
 
 /// An IR with the parameter values it runs with.

@@ -46,7 +46,7 @@ pub fn compile(ir: &Ir) -> Result<Arc<dyn NativeCode>, JitError> {
     Ok(Arc::new(JitCode::new(ir)?))
 }
 
-/// Functions above this many instructions (the bicycle's Jacobians: 33 000) are compiled with
+/// Functions above this many instructions (the bicycle's Jacobians: 18 000) are compiled with
 /// Cranelift's single-pass register allocator: the default (backtracking) one took 2.9 s for
 /// the bicycle against 0.06 s, while for vehicle-sized functions it is fast and its code better.
 const SINGLE_PASS_ABOVE: usize = 4000;
