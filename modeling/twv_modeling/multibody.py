@@ -360,7 +360,8 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
         # Hamel equations projected onto the admissible speeds (d'Alembert), written body by
         # body from the constrained velocities, so that nothing of the unconstrained n x n
         # system is formed: the Whipple bicycle's f in 2,489 operations instead of 5,093
-        # (test_whipple_kane.py checks both against sympy's Kane method).
+        # (test_whipple_kane.py checks it against sympy's Kane method, test_rolling_disc.py
+        # against the change of quasi-velocities below).
         pf_on = on_constraint(pf_expr)
         p_ind = ca.vertcat(*[pf[s] for s in independent])
         T_I = ca.jacobian(pf_on, p_ind)
@@ -531,7 +532,7 @@ def _kane(system, kin, bodies, on, p_ind, q_qdot, g):
     m = p_ind.numel()
     M, Cp, F = ca.SX(m, m), ca.SX(m, 1), ca.SX(m, 1)
     for body, b in zip(system.bodies, bodies, strict=True):
-        frame, joint = kin.frames[body.frame], kin.joints[body.frame]
+        frame, joint = kin.frames[body.frame], kin.joints.get(body.frame)  # None: the ground
         v, w = on(b.v), on(b.omega)
         rotor = isinstance(joint, RevoluteJoint) and joint.axisymmetric
         w_frame = on(frame.rot.T @ kin.frames[joint.parent].omega) if rotor else w
