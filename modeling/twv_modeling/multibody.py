@@ -219,6 +219,14 @@ class _Kinematics:
             r_b = r_b @ self.relative[f]
         return r_a.T @ r_b
 
+    def ground_rotation(self, ref: str) -> ca.SX:
+        """R_NG of a reference frame G (`_Frame.ref`): its components -> N components."""
+        return self.position(ref)[1] if ref != GROUND else ca.SX.eye(3)
+
+    def up_in(self, ref: str) -> ca.SX:
+        """The ground's upward normal in the components of reference frame `ref`."""
+        return self.ground_rotation(ref).T @ vec3((0, 0, 1))
+
     def position(self, frame: str) -> tuple[ca.SX, ca.SX]:
         """Origin position in N and R_NF, composed from the root."""
         origin, rot = vec3((0, 0, 0)), ca.SX.eye(3)
@@ -246,7 +254,7 @@ def _body_kinematics(kin: _Kinematics, body: Body) -> _BodyKinematics:
     v_c = fr.velocity + ca.cross(fr.omega, fr.rot @ c)
     omega_body = fr.rot.T @ fr.omega
     origin, rot_nf = kin.position(body.frame)
-    _, rot_ng = kin.position(fr.ref) if fr.ref != GROUND else (None, ca.SX.eye(3))
+    rot_ng = kin.ground_rotation(fr.ref)
     r_c = origin + rot_nf @ c
     lin = body.mass * (rot_ng @ v_c)
     ang = ca.cross(r_c, lin)[2] + (rot_nf @ (inertia @ omega_body))[2]
@@ -372,7 +380,7 @@ def derive(system: MultibodySystem, param_symbols: dict, p_vec: ca.SX) -> Derive
         qdot = on(V_full @ pf_vec)
         M_c, Cp_c, F_c = _kane(system, kin, bodies, on, p_ind, (q_vec, qdot), g)
         Q_c = T_I.T @ on(ca.gradient(power, pf_vec))
-        energy_c = on(_kinetic_energy(bodies, lambda e: e)) + U
+        energy_c = on(_kinetic_energy((b, b.v, b.omega) for b in bodies)) + U
         momentum_c = on(ca.vertcat(lin[0], lin[1], ang))
     else:
         # Coordinate-free coefficients: Hamel's equations in the new quasi-velocities (the
@@ -486,15 +494,16 @@ def _hamel(bodies, speed_of, p_vec, q_vec, V, gamma):
     `speed_of`; also q_dot. v and omega are linear in p: M = sum m Jv^T Jv + Jw^T I Jw,
     P = dT/dp = M p, dT/dq = sum m (dv/dq)^T v + (dw/dq)^T I w, by the chain rule body by body."""
     n = p_vec.numel()
-    M, P, dT_dq = ca.SX(n, n), ca.SX(n, 1), ca.SX(n, 1)
+    M, P, dT_dq, moving = ca.SX(n, n), ca.SX(n, 1), ca.SX(n, 1), []
     for b in bodies:
         v, w = speed_of(b.v), speed_of(b.omega)
+        moving.append((b, v, w))
         Iw = b.inertia @ w
         Jv, Jw = ca.jacobian(v, p_vec), ca.jacobian(w, p_vec)
         M = M + b.mass * (Jv.T @ Jv) + Jw.T @ (b.inertia @ Jw)
         P = P + b.mass * (Jv.T @ v) + Jw.T @ Iw
         dT_dq = dT_dq + b.mass * (ca.jacobian(v, q_vec).T @ v) + ca.jacobian(w, q_vec).T @ Iw
-    T = _kinetic_energy(bodies, speed_of)
+    T = _kinetic_energy(moving)
     qdot = V @ p_vec
     Cp = ca.jacobian(P, q_vec) @ qdot - V.T @ dT_dq
     for k in range(n):
@@ -507,11 +516,10 @@ def _hamel(bodies, speed_of, p_vec, q_vec, V, gamma):
     return M, Cp, T, qdot
 
 
-def _kinetic_energy(bodies, speed_of) -> ca.SX:
-    """T = sum of m v.v / 2 + w.I w / 2, the body velocities written by `speed_of`."""
+def _kinetic_energy(moving) -> ca.SX:
+    """T = sum of m v.v / 2 + w.I w / 2 over (body, v, w): each body with its velocities."""
     T = 0
-    for b in bodies:
-        v, w = speed_of(b.v), speed_of(b.omega)
+    for b, v, w in moving:
         T = T + 0.5 * b.mass * ca.dot(v, v) + 0.5 * ca.dot(w, b.inertia @ w)
     return T
 
@@ -537,8 +545,7 @@ def _kane(system, kin, bodies, on, p_ind, q_qdot, g):
         rotor = isinstance(joint, RevoluteJoint) and joint.axisymmetric
         w_frame = on(frame.rot.T @ kin.frames[joint.parent].omega) if rotor else w
         w_ref = on(kin.frames[frame.ref].omega)
-        _, rot_ng = kin.position(frame.ref) if frame.ref != GROUND else (None, ca.SX.eye(3))
-        up = rot_ng.T @ vec3((0, 0, 1))
+        up = kin.up_in(frame.ref)
         Jv, Jw = ca.jacobian(v, p_ind), ca.jacobian(w, p_ind)
         a = ca.jtimes(v, q_vec, qdot) + ca.cross(w_ref, v)
         alpha = ca.jtimes(w, q_vec, qdot)
@@ -563,8 +570,7 @@ def _contact_constraints(system, kin, q, pf, already_dependent) -> list[Constrai
         if not (isinstance(j, RevoluteJoint) and j.axisymmetric):
             raise ModelError(f"contact on {contact.wheel}: the wheel must be a rotor joint")
         frame = kin.frames[contact.wheel]
-        _, rot_ng = kin.position(frame.ref) if frame.ref != GROUND else (None, ca.SX.eye(3))
-        normal = rot_ng.T @ vec3((0, 0, 1))  # the ground normal in the reference components
+        normal = kin.up_in(frame.ref)  # the ground normal in the reference components
         axle = frame.rot @ axis_vector(j.axis, f"wheel {j.name}")
         down = normal - ca.dot(normal, axle) * axle
         d = down / ca.norm_2(down)
