@@ -58,7 +58,8 @@ impl GridOptions {
     }
 }
 
-/// Margins of a loop. Gain, phase and delay margins are meaningful only when `stable`.
+/// Margins of a loop. Gain, phase and delay margins are meaningful only when `stable`; a loop
+/// that its delay destabilises reports no phase crossover and the delay-free gain crossovers.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Margins {
     /// Nominal closed loop stable, delay included.
@@ -93,6 +94,25 @@ pub fn loop_margins(
     delay_free_stable: bool,
     grid: &GridOptions,
 ) -> Margins {
+    if delay > 0.0 {
+        // |L| and so the gain crossovers do not depend on the delay, and the delay-free loop's
+        // delay margin says whether this one is stable. When it is not, no margin is defined and
+        // the delayed L is not resolved: its phase spins at ωT, so resolving it would take work
+        // growing with the delay without bound (a delay of hours is an input, not a loop).
+        let free = loop_margins(l0, 0.0, delay_free_stable, grid);
+        if !(free.stable && delay < free.delay_margin) {
+            return Margins {
+                stable: false,
+                phase_crossovers: Vec::new(),
+                gain_margin_upper: f64::INFINITY,
+                gain_margin_lower: 0.0,
+                delay_margin: (free.delay_margin - delay).max(0.0),
+                disk: DiskMargin::from_alpha(0.0, free.disk.frequency),
+                peak_sensitivity: f64::INFINITY,
+                ..free
+            };
+        }
+    }
     let l = |w: f64| l0(w).map(|v| v * Complex::from_polar(1.0, -w * delay));
     let pts = refined_grid(&l, grid);
 

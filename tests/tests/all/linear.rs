@@ -304,6 +304,38 @@ fn study_pd_is_stabilising_with_closed_form_margins() {
     );
 }
 
+/// A delay spins L's phase at ωT. Below the delay-free loop's delay margin the loop stays
+/// stable with that margin less the delay; at or above it, and for a delay of hours (which once
+/// made the margins resolve L on hundreds of millions of frequencies, minutes and gigabytes),
+/// the loop is unstable at once, with the delay-free gain crossovers and no phase crossover.
+#[test]
+fn a_delay_beyond_the_delay_margin_is_unstable_without_resolving_the_spinning_phase() {
+    let lp = pitch_loop();
+    let g = PidGains::pd(3860.0, 1980.0);
+    let free = analyse_pitch(&lp, &g, &LoopOptions::default())
+        .unwrap()
+        .margins;
+    assert!(free.stable && free.delay_margin.is_finite() && free.delay_margin > 0.0);
+    let with = |delay: f64| {
+        analyse_pitch(&lp, &g, &LoopOptions { lag: 0.0, delay })
+            .unwrap()
+            .margins
+    };
+    let below = with(0.9 * free.delay_margin);
+    assert!(below.stable, "{below:?}");
+    assert!(
+        rel(below.delay_margin, 0.1 * free.delay_margin) < 1e-6,
+        "{below:?}"
+    );
+    for delay in [1.1 * free.delay_margin, 7541.05, 3.6e6] {
+        let m = with(delay);
+        assert!(!m.stable && m.delay_margin == 0.0, "delay {delay}: {m:?}");
+        assert_eq!(m.gain_crossovers, free.gain_crossovers, "delay {delay}");
+        assert!(m.phase_crossovers.is_empty() && m.peak_sensitivity.is_infinite());
+        assert_eq!(m.disk.alpha, 0.0);
+    }
+}
+
 #[test]
 fn lqr_solves_the_riccati_equation_and_stabilises() {
     // Scalar: ẋ = x + u, q = r = 1: P = 1 + √2.
