@@ -1,19 +1,21 @@
 //! The one dispatch point: a resolved model handed to generic code with its sizes as constants.
 //!
-//! A shipped model runs as its generated type; an IR file on the interpreter, whose state count
-//! is chosen from the file (1 to 12; inputs are padded to 4, see `twv_ir::Interpreted`), so each
-//! job is instantiated once per shipped model and once per state count.
+//! Each state count has one model type ([`super::sized`]): the shipped models of that count
+//! (generated code, their inputs padded to 4) and any IR of that count (the interpreter or its
+//! native code, inputs padded to 4, see `twv_ir::Interpreted`) are variants of one enum. So each
+//! job is instantiated once per state count (1 to 12), whichever models ship.
 //!
 //! A closed loop with NZ controller states is a `VectorField<NA>` with NA = NX + NZ, which
 //! stable Rust cannot spell for a generic NX; [`dispatch_control`] resolves the model with NX as
-//! a literal and matches NZ ∈ 0..=3 to `{NX + NZ}`: four instantiations per model that has a
-//! pitch to control (vehicle8, vehicle7, segway7; IR files with 8, 7 or 4 states).
+//! a literal and matches NZ ∈ 0..=3 to `{NX + NZ}`: four instantiations per state count that
+//! has a pitch to control (8: vehicle8; 7: vehicle7, segway7; IR files with 8, 7 or 4 states),
+//! all with 2 inputs there.
 //! [`dispatch_steer_filtered`] does the same for a steer law's rate filter (NZ = 2).
 
-use twv_generated::{Segway7, Vehicle7, Vehicle8};
-use twv_ir::{Interpreted, MAX_NU};
-use twv_model::{Model, ModelVisitor};
+use twv_ir::{Interpreted, UnsupportedSize, MAX_NU, MAX_NX};
+use twv_model::Model;
 
+use super::sized::{Control7, Control8, Model3, Model4, Model7, Model8};
 use super::{Engine, ResolvedModel};
 use crate::error::{Error, Result};
 
@@ -29,38 +31,46 @@ pub trait ModelTask {
     ) -> Result<Self::Output>;
 }
 
-struct Visit<'a, T> {
-    task: T,
-    resolved: &'a ResolvedModel,
-}
-
-impl<T: ModelTask> ModelVisitor for Visit<'_, T> {
-    type Output = Result<T::Output>;
-    fn visit<const NX: usize, const NU: usize, M: Model<NX, NU>>(self, model: M) -> Self::Output {
-        self.task.run(&model, self.resolved)
-    }
+/// The interpreted model of a state count without generated models.
+fn interpreted<const NX: usize, const NU: usize>(
+    resolved: &ResolvedModel,
+) -> Result<Interpreted<NX, NU>> {
+    Ok(Interpreted::with_native(
+        &resolved.ir,
+        &resolved.params,
+        resolved.native.clone(),
+    )?)
 }
 
 /// Runs `task` on the resolved model: generated code for a shipped model, the interpreter or
-/// the IR's native code otherwise.
+/// the IR's native code otherwise, as its state count's one model type.
 pub fn dispatch<T: ModelTask>(resolved: &ResolvedModel, task: T) -> Result<T::Output> {
-    let visitor = Visit { task, resolved };
-    match &resolved.engine {
-        Engine::Generated(name) => twv_generated::visit(name, Some(&resolved.params), visitor)
-            .map_err(|e| Error::Unsupported {
-                model: name.clone(),
-                reason: e.to_string(),
-            })?,
-        Engine::Interpreted | Engine::Jit => {
-            let native = resolved.native.clone();
-            twv_ir::visit_interpreted(&resolved.ir, &resolved.params, native, visitor).map_err(
-                |e| match e {
-                    twv_ir::VisitError::Size(s) => Error::Size(s),
-                    twv_ir::VisitError::Model(m) => Error::Model(m),
-                },
-            )?
-        }
+    let ir = &resolved.ir;
+    let unsupported = || {
+        Error::Size(UnsupportedSize {
+            file: ir.file().to_string(),
+            nx: ir.nx(),
+            nu: ir.nu(),
+            max_nx: MAX_NX,
+            max_nu: MAX_NU,
+        })
+    };
+    if ir.nu() > MAX_NU {
+        return Err(unsupported());
     }
+    macro_rules! by_size {
+        ($($nx:literal),*) => {
+            match ir.nx() {
+                3 => task.run(&Model3::new(resolved)?, resolved),
+                4 => task.run(&Model4::new(resolved)?, resolved),
+                7 => task.run(&Model7::new(resolved)?, resolved),
+                8 => task.run(&Model8::new(resolved)?, resolved),
+                $($nx => task.run(&interpreted::<$nx, MAX_NU>(resolved)?, resolved),)*
+                _ => Err(unsupported()),
+            }
+        };
+    }
+    by_size!(1, 2, 5, 6, 9, 10, 11, 12)
 }
 
 /// Work on a closed loop whose augmented size NA is known only once the controller is.
@@ -96,16 +106,6 @@ pub fn dispatch_control<T: ControlTask>(
             }
         }};
     }
-    let params = &resolved.params;
-    let values = |n: usize| -> Result<Vec<f64>> {
-        if params.len() != n {
-            return Err(Error::input(
-                "params",
-                format!("{} parameter values for a model with {n}", params.len()),
-            ));
-        }
-        Ok(params.clone())
-    };
     let no_pitch = |model: &str| Error::Unsupported {
         model: model.to_string(),
         reason: "no pitch to control: the control jobs run vehicle8, vehicle7, segway7, or an IR \
@@ -113,36 +113,25 @@ pub fn dispatch_control<T: ControlTask>(
                  or tau_L, tau_R); for an uncontrolled run use `twv ride`"
             .to_string(),
     };
+    let ir = &resolved.ir;
     match &resolved.engine {
-        Engine::Generated(name) => match name.as_str() {
-            "vehicle8" => with_na!(Vehicle8::new(fixed(values(Vehicle8::NP)?)), 8, 2),
-            "vehicle7" => with_na!(Vehicle7::new(fixed(values(Vehicle7::NP)?)), 7, 2),
-            "segway7" => with_na!(Segway7::new(fixed(values(Segway7::NP)?)), 7, 2),
-            other => Err(no_pitch(other)),
-        },
-        Engine::Interpreted | Engine::Jit => {
-            let ir = &resolved.ir;
-            let native = resolved.native.clone();
-            // Interpreted models take MAX_NU inputs, their own first (see `twv_ir::Interpreted`).
-            match (ir.nx(), ir.nu()) {
-                (8, 1 | 2) => with_na!(
-                    Interpreted::<8, MAX_NU>::with_native(ir, params, native)?,
-                    8,
-                    MAX_NU
-                ),
-                (7, 1 | 2) => with_na!(
-                    Interpreted::<7, MAX_NU>::with_native(ir, params, native)?,
-                    7,
-                    MAX_NU
-                ),
-                (4, 1 | 2) => with_na!(
-                    Interpreted::<4, MAX_NU>::with_native(ir, params, native)?,
-                    4,
-                    MAX_NU
-                ),
-                _ => Err(no_pitch(&resolved.origin)),
-            }
+        Engine::Generated(name)
+            if !["vehicle8", "vehicle7", "segway7"].contains(&name.as_str()) =>
+        {
+            return Err(no_pitch(name))
         }
+        Engine::Interpreted | Engine::Jit if !matches!(ir.nu(), 1 | 2) => {
+            return Err(no_pitch(&resolved.origin))
+        }
+        _ => {}
+    }
+    // Two inputs, an IR's own first (see `twv_ir::Interpreted`): the shipped vehicles' count,
+    // so their generated code runs unpadded in the hot loops (see `super::sized`).
+    match ir.nx() {
+        8 => with_na!(Control8::new(resolved)?, 8, 2),
+        7 => with_na!(Control7::new(resolved)?, 7, 2),
+        4 => with_na!(interpreted::<4, 2>(resolved)?, 4, 2),
+        _ => Err(no_pitch(&resolved.origin)),
     }
 }
 
@@ -155,12 +144,9 @@ pub fn dispatch_steer_filtered<T: ControlTask>(
     task: T,
 ) -> Result<T::Output> {
     crate::control::steer::steer_input(resolved.name(), &resolved.inputs())?;
-    let ir = &resolved.ir;
-    let native = resolved.native.clone();
-    match (&resolved.engine, ir.nx()) {
+    match (&resolved.engine, resolved.ir.nx()) {
         (Engine::Interpreted | Engine::Jit, 9) => {
-            let model = Interpreted::<9, MAX_NU>::with_native(ir, &resolved.params, native)?;
-            task.run::<9, MAX_NU, 11, _>(&model, resolved)
+            task.run::<9, MAX_NU, 11, _>(&interpreted::<9, MAX_NU>(resolved)?, resolved)
         }
         (_, nx) => Err(Error::Unsupported {
             model: resolved.name().to_string(),
@@ -170,11 +156,4 @@ pub fn dispatch_steer_filtered<T: ControlTask>(
             ),
         }),
     }
-}
-
-/// A parameter vector of checked length as an array.
-fn fixed<const N: usize>(v: Vec<f64>) -> [f64; N] {
-    let mut out = [0.0; N];
-    out.iter_mut().zip(&v).for_each(|(o, x)| *o = *x);
-    out
 }

@@ -3,6 +3,7 @@
 //! as constants, to the generic code ([`dispatch`], [`dispatch_control`]).
 
 mod dispatch;
+mod sized;
 mod vector;
 
 use std::path::{Path, PathBuf};

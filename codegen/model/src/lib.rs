@@ -13,6 +13,10 @@
 //!   non-finite outputs.
 #![no_std]
 
+mod padded;
+
+pub use padded::{NoModel, Padded};
+
 /// Points one lanes kernel evaluates at once ([`Model::f_jw_jac_u_lanes`]); the arithmetic
 /// behind it is `twv_kernels::lanes`.
 pub const LANES: usize = 8;

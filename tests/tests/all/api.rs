@@ -322,3 +322,58 @@ fn sweep_in_memory_has_one_result_per_point() {
         }
     }
 }
+
+/// The type a dispatch hands to generic code, by name.
+struct TypeOf;
+
+impl twv_analysis::model::ModelTask for TypeOf {
+    type Output = &'static str;
+    fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
+        self,
+        _: &M,
+        _: &twv_analysis::model::ResolvedModel,
+    ) -> twv_analysis::Result<&'static str> {
+        Ok(std::any::type_name::<M>())
+    }
+}
+
+impl twv_analysis::model::ControlTask for TypeOf {
+    type Output = &'static str;
+    fn run<const NX: usize, const NU: usize, const NA: usize, M: Model<NX, NU>>(
+        self,
+        _: &M,
+        _: &twv_analysis::model::ResolvedModel,
+    ) -> twv_analysis::Result<&'static str> {
+        Ok(std::any::type_name::<M>())
+    }
+}
+
+/// Every job is compiled once per model type it is handed, so a shipped model must reach the
+/// jobs as the same type as any IR of its state count (its generated code one variant, the
+/// interpreter another): then shipping a model adds no instantiation of any job. Checked for
+/// every shipped model against its own IR on the interpreter, open-loop and, for the vehicles,
+/// closed-loop.
+#[test]
+fn a_shipped_model_and_an_ir_of_its_size_reach_the_jobs_as_one_type() {
+    use twv_analysis::model::{dispatch, dispatch_control, Engine};
+    for name in ["vehicle8", "vehicle7", "segway7", "lorenz", "henon_heiles"] {
+        let generated = shipped(name);
+        let interpreted = ir(&format!("generated/ir/{name}.json"));
+        assert_eq!(generated.engine, Engine::Generated(name.into()), "{name}");
+        assert_eq!(interpreted.engine, Engine::Interpreted, "{name}");
+        let (a, b) = (
+            dispatch(&generated, TypeOf).unwrap(),
+            dispatch(&interpreted, TypeOf).unwrap(),
+        );
+        assert_eq!(a, b, "{name}: open-loop jobs see two types");
+        if name.starts_with("vehicle") || name == "segway7" {
+            for nz in 0..=3 {
+                let (a, b) = (
+                    dispatch_control(&generated, nz, TypeOf).unwrap(),
+                    dispatch_control(&interpreted, nz, TypeOf).unwrap(),
+                );
+                assert_eq!(a, b, "{name}, {nz} controller states: two types");
+            }
+        }
+    }
+}

@@ -400,6 +400,35 @@ fn sparse_and_jw_match_dense<const NX: usize, const NU: usize>(
     }
 }
 
+/// The analysis dispatch runs a shipped model padded to the interpreter's 4 inputs, as one type
+/// with the interpreted models of its state count: padded, every output is still its generated
+/// kernel's bits, and the padding columns of ∂f/∂u are zero as the interpreter writes them, so
+/// the padded model and the interpreter agree bit for bit on every method (lanes included).
+#[test]
+fn a_generated_model_padded_to_four_inputs_is_the_interpreter_bit_for_bit() {
+    use twv_ir::MAX_NU;
+    use twv_model::Padded;
+    fn check<const NX: usize, const NU: usize, M: Model<NX, NU>>(model: M, params: &[f64]) {
+        let name = model.info().name;
+        let padded = Padded::<M, NU>(model);
+        same_model(
+            &padded,
+            &interpreted::<NX, MAX_NU>(name, params),
+            &format!("{name} padded"),
+        );
+    }
+    let v8 = Vehicle8::with_defaults();
+    check(v8, v8.params());
+    let v7 = Vehicle7::with_defaults();
+    check(v7, v7.params());
+    let s7 = Segway7::with_defaults();
+    check(s7, s7.params());
+    let lz = Lorenz::with_defaults();
+    check(lz, lz.params());
+    let hh = HenonHeiles::with_defaults();
+    check(hh, hh.params());
+}
+
 #[test]
 fn sparse_jacobian_and_jw_match_dense() {
     sparse_and_jw_match_dense(&Vehicle8::with_defaults(), "vehicle8");
