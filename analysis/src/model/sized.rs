@@ -116,119 +116,138 @@ macro_rules! each {
     };
 }
 
+/// `$call` on the model an [`OutOfLine`] wraps, bound to `$m`.
+macro_rules! inner {
+    ($self:expr, $m:ident => $call:expr) => {{
+        let $m = &$self.0;
+        $call
+    }};
+}
+
+/// Every method of [`Model`], with attribute `$attr`, handing its arguments to the model
+/// `$reach!` finds in `self`: the one body of both forwarding types below.
+macro_rules! forward_model {
+    (#[$attr:meta] $reach:ident) => {
+        #[$attr]
+        fn info(&self) -> ModelInfo {
+            $reach!(self, m => m.info())
+        }
+
+        #[$attr]
+        fn f(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [f64; NX]) {
+            $reach!(self, m => m.f(x, u, out))
+        }
+
+        #[$attr]
+        fn jac_x(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NX]; NX]) {
+            $reach!(self, m => m.jac_x(x, u, out))
+        }
+
+        #[$attr]
+        fn jac_u(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NU]; NX]) {
+            $reach!(self, m => m.jac_u(x, u, out))
+        }
+
+        #[$attr]
+        fn jac_x_colind(&self) -> &[usize] {
+            $reach!(self, m => m.jac_x_colind())
+        }
+
+        #[$attr]
+        fn jac_x_row(&self) -> &[usize] {
+            $reach!(self, m => m.jac_x_row())
+        }
+
+        #[$attr]
+        fn jac_x_sparse(&self, x: &[f64; NX], u: &[f64; NU], values: &mut [f64]) {
+            $reach!(self, m => m.jac_x_sparse(x, u, values))
+        }
+
+        #[$attr]
+        fn f_jw<const K: usize>(
+            &self,
+            x: &[f64; NX],
+            u: &[f64; NU],
+            w: &[[f64; NX]; K],
+            f: &mut [f64; NX],
+            out: &mut [[f64; NX]; K],
+        ) {
+            $reach!(self, m => m.f_jw(x, u, w, f, out))
+        }
+
+        #[$attr]
+        fn f_jw_trace<const K: usize>(
+            &self,
+            x: &[f64; NX],
+            u: &[f64; NU],
+            w: &[[f64; NX]; K],
+            f: &mut [f64; NX],
+            out: &mut [[f64; NX]; K],
+        ) -> f64 {
+            $reach!(self, m => m.f_jw_trace(x, u, w, f, out))
+        }
+
+        #[$attr]
+        fn f_jw_jac_u<const K: usize>(
+            &self,
+            x: &[f64; NX],
+            u: &[f64; NU],
+            w: &[[f64; NX]; K],
+            f: &mut [f64; NX],
+            out: &mut [[f64; NX]; K],
+            jac_u: &mut [[f64; NU]; NX],
+        ) {
+            $reach!(self, m => m.f_jw_jac_u(x, u, w, f, out, jac_u))
+        }
+
+        #[$attr]
+        fn f_jw_jac_u_lanes(
+            &self,
+            x: &[[f64; NX]; LANES],
+            u: &[[f64; NU]; LANES],
+            w: &[[f64; NX]; LANES],
+            f: &mut [[f64; NX]; LANES],
+            out: &mut [[f64; NX]; LANES],
+            jac_u: &mut [[[f64; NU]; NX]; LANES],
+        ) {
+            $reach!(self, m => m.f_jw_jac_u_lanes(x, u, w, f, out, jac_u))
+        }
+
+        #[$attr]
+        fn f_jw_jac_u_lane_arrays(
+            &self,
+            x: &[[f64; LANES]; NX],
+            u: &[[f64; LANES]; NU],
+            w: &[[f64; LANES]; NX],
+            f: &mut [[f64; LANES]; NX],
+            out: &mut [[f64; LANES]; NX],
+            jac_u: &mut [[[f64; LANES]; NU]; NX],
+        ) {
+            $reach!(self, m => m.f_jw_jac_u_lane_arrays(x, u, w, f, out, jac_u))
+        }
+
+        #[$attr]
+        fn jw<const K: usize>(
+            &self,
+            x: &[f64; NX],
+            u: &[f64; NU],
+            w: &[[f64; NX]; K],
+            out: &mut [[f64; NX]; K],
+        ) {
+            $reach!(self, m => m.jw(x, u, w, out))
+        }
+    };
+}
+
 impl<A, B, const NX: usize, const NU: usize> Model<NX, NU> for SizedModel<A, B, NX, NU>
 where
     A: Model<NX, NU>,
     B: Model<NX, NU>,
 {
-    #[inline]
-    fn info(&self) -> ModelInfo {
-        each!(self, m => m.info())
-    }
-
-    #[inline]
-    fn f(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [f64; NX]) {
-        each!(self, m => m.f(x, u, out))
-    }
-
-    #[inline]
-    fn jac_x(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NX]; NX]) {
-        each!(self, m => m.jac_x(x, u, out))
-    }
-
-    #[inline]
-    fn jac_u(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NU]; NX]) {
-        each!(self, m => m.jac_u(x, u, out))
-    }
-
-    #[inline]
-    fn jac_x_colind(&self) -> &[usize] {
-        each!(self, m => m.jac_x_colind())
-    }
-
-    #[inline]
-    fn jac_x_row(&self) -> &[usize] {
-        each!(self, m => m.jac_x_row())
-    }
-
-    #[inline]
-    fn jac_x_sparse(&self, x: &[f64; NX], u: &[f64; NU], values: &mut [f64]) {
-        each!(self, m => m.jac_x_sparse(x, u, values))
-    }
-
-    #[inline]
-    fn f_jw<const K: usize>(
-        &self,
-        x: &[f64; NX],
-        u: &[f64; NU],
-        w: &[[f64; NX]; K],
-        f: &mut [f64; NX],
-        out: &mut [[f64; NX]; K],
-    ) {
-        each!(self, m => m.f_jw(x, u, w, f, out))
-    }
-
-    #[inline]
-    fn f_jw_trace<const K: usize>(
-        &self,
-        x: &[f64; NX],
-        u: &[f64; NU],
-        w: &[[f64; NX]; K],
-        f: &mut [f64; NX],
-        out: &mut [[f64; NX]; K],
-    ) -> f64 {
-        each!(self, m => m.f_jw_trace(x, u, w, f, out))
-    }
-
-    #[inline]
-    fn f_jw_jac_u<const K: usize>(
-        &self,
-        x: &[f64; NX],
-        u: &[f64; NU],
-        w: &[[f64; NX]; K],
-        f: &mut [f64; NX],
-        out: &mut [[f64; NX]; K],
-        jac_u: &mut [[f64; NU]; NX],
-    ) {
-        each!(self, m => m.f_jw_jac_u(x, u, w, f, out, jac_u))
-    }
-
-    #[inline]
-    fn f_jw_jac_u_lanes(
-        &self,
-        x: &[[f64; NX]; LANES],
-        u: &[[f64; NU]; LANES],
-        w: &[[f64; NX]; LANES],
-        f: &mut [[f64; NX]; LANES],
-        out: &mut [[f64; NX]; LANES],
-        jac_u: &mut [[[f64; NU]; NX]; LANES],
-    ) {
-        each!(self, m => m.f_jw_jac_u_lanes(x, u, w, f, out, jac_u))
-    }
-
-    #[inline]
-    fn f_jw_jac_u_lane_arrays(
-        &self,
-        x: &[[f64; LANES]; NX],
-        u: &[[f64; LANES]; NU],
-        w: &[[f64; LANES]; NX],
-        f: &mut [[f64; LANES]; NX],
-        out: &mut [[f64; LANES]; NX],
-        jac_u: &mut [[[f64; LANES]; NU]; NX],
-    ) {
-        each!(self, m => m.f_jw_jac_u_lane_arrays(x, u, w, f, out, jac_u))
-    }
-
-    #[inline]
-    fn jw<const K: usize>(
-        &self,
-        x: &[f64; NX],
-        u: &[f64; NU],
-        w: &[[f64; NX]; K],
-        out: &mut [[f64; NX]; K],
-    ) {
-        each!(self, m => m.jw(x, u, w, out))
-    }
+    forward_model!(
+        #[inline]
+        each
+    );
 }
 
 /// A model whose every method is a call, never inlined: the interpreter's arm of
@@ -239,112 +258,8 @@ where
 pub struct OutOfLine<M>(pub M);
 
 impl<M: Model<NX, NU>, const NX: usize, const NU: usize> Model<NX, NU> for OutOfLine<M> {
-    #[inline(never)]
-    fn info(&self) -> ModelInfo {
-        self.0.info()
-    }
-
-    #[inline(never)]
-    fn f(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [f64; NX]) {
-        self.0.f(x, u, out)
-    }
-
-    #[inline(never)]
-    fn jac_x(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NX]; NX]) {
-        self.0.jac_x(x, u, out)
-    }
-
-    #[inline(never)]
-    fn jac_u(&self, x: &[f64; NX], u: &[f64; NU], out: &mut [[f64; NU]; NX]) {
-        self.0.jac_u(x, u, out)
-    }
-
-    #[inline(never)]
-    fn jac_x_colind(&self) -> &[usize] {
-        self.0.jac_x_colind()
-    }
-
-    #[inline(never)]
-    fn jac_x_row(&self) -> &[usize] {
-        self.0.jac_x_row()
-    }
-
-    #[inline(never)]
-    fn jac_x_sparse(&self, x: &[f64; NX], u: &[f64; NU], values: &mut [f64]) {
-        self.0.jac_x_sparse(x, u, values)
-    }
-
-    #[inline(never)]
-    fn f_jw<const K: usize>(
-        &self,
-        x: &[f64; NX],
-        u: &[f64; NU],
-        w: &[[f64; NX]; K],
-        f: &mut [f64; NX],
-        out: &mut [[f64; NX]; K],
-    ) {
-        self.0.f_jw(x, u, w, f, out)
-    }
-
-    #[inline(never)]
-    fn f_jw_trace<const K: usize>(
-        &self,
-        x: &[f64; NX],
-        u: &[f64; NU],
-        w: &[[f64; NX]; K],
-        f: &mut [f64; NX],
-        out: &mut [[f64; NX]; K],
-    ) -> f64 {
-        self.0.f_jw_trace(x, u, w, f, out)
-    }
-
-    #[inline(never)]
-    fn f_jw_jac_u<const K: usize>(
-        &self,
-        x: &[f64; NX],
-        u: &[f64; NU],
-        w: &[[f64; NX]; K],
-        f: &mut [f64; NX],
-        out: &mut [[f64; NX]; K],
-        jac_u: &mut [[f64; NU]; NX],
-    ) {
-        self.0.f_jw_jac_u(x, u, w, f, out, jac_u)
-    }
-
-    #[inline(never)]
-    fn f_jw_jac_u_lanes(
-        &self,
-        x: &[[f64; NX]; LANES],
-        u: &[[f64; NU]; LANES],
-        w: &[[f64; NX]; LANES],
-        f: &mut [[f64; NX]; LANES],
-        out: &mut [[f64; NX]; LANES],
-        jac_u: &mut [[[f64; NU]; NX]; LANES],
-    ) {
-        self.0.f_jw_jac_u_lanes(x, u, w, f, out, jac_u)
-    }
-
-    #[inline(never)]
-    fn f_jw_jac_u_lane_arrays(
-        &self,
-        x: &[[f64; LANES]; NX],
-        u: &[[f64; LANES]; NU],
-        w: &[[f64; LANES]; NX],
-        f: &mut [[f64; LANES]; NX],
-        out: &mut [[f64; LANES]; NX],
-        jac_u: &mut [[[f64; LANES]; NU]; NX],
-    ) {
-        self.0.f_jw_jac_u_lane_arrays(x, u, w, f, out, jac_u)
-    }
-
-    #[inline(never)]
-    fn jw<const K: usize>(
-        &self,
-        x: &[f64; NX],
-        u: &[f64; NU],
-        w: &[[f64; NX]; K],
-        out: &mut [[f64; NX]; K],
-    ) {
-        self.0.jw(x, u, w, out)
-    }
+    forward_model!(
+        #[inline(never)]
+        inner
+    );
 }
