@@ -12,10 +12,10 @@
 //! all with 2 inputs there.
 //! [`dispatch_steer_filtered`] does the same for a steer law's rate filter (NZ = 2).
 
-use twv_ir::{Interpreted, UnsupportedSize, MAX_NU, MAX_NX};
+use twv_ir::{UnsupportedSize, MAX_NU};
 use twv_model::Model;
 
-use super::sized::{Control7, Control8, Model3, Model4, Model7, Model8};
+use super::sized::{interpreted, Control7, Control8, Model3, Model4, Model7, Model8};
 use super::{Engine, ResolvedModel};
 use crate::error::{Error, Result};
 
@@ -31,30 +31,11 @@ pub trait ModelTask {
     ) -> Result<Self::Output>;
 }
 
-/// The interpreted model of a state count without generated models.
-fn interpreted<const NX: usize, const NU: usize>(
-    resolved: &ResolvedModel,
-) -> Result<Interpreted<NX, NU>> {
-    Ok(Interpreted::with_native(
-        &resolved.ir,
-        &resolved.params,
-        resolved.native.clone(),
-    )?)
-}
-
 /// Runs `task` on the resolved model: generated code for a shipped model, the interpreter or
 /// the IR's native code otherwise, as its state count's one model type.
 pub fn dispatch<T: ModelTask>(resolved: &ResolvedModel, task: T) -> Result<T::Output> {
     let ir = &resolved.ir;
-    let unsupported = || {
-        Error::Size(UnsupportedSize {
-            file: ir.file().to_string(),
-            nx: ir.nx(),
-            nu: ir.nu(),
-            max_nx: MAX_NX,
-            max_nu: MAX_NU,
-        })
-    };
+    let unsupported = || Error::Size(UnsupportedSize::of(ir));
     if ir.nu() > MAX_NU {
         return Err(unsupported());
     }

@@ -98,11 +98,23 @@ impl<A: Shipped, B: Shipped, const NX: usize, const NU: usize> SizedModel<A, B, 
                 model: name.clone(),
                 reason: format!("no generated model of {NX} states has this name"),
             }),
-            Engine::Interpreted | Engine::Jit => Ok(Self::Interpreted(OutOfLine(
-                Interpreted::with_native(&resolved.ir, &resolved.params, resolved.native.clone())?,
-            ))),
+            Engine::Interpreted | Engine::Jit => {
+                Ok(Self::Interpreted(OutOfLine(interpreted(resolved)?)))
+            }
         }
     }
+}
+
+/// The resolved model on the interpreter (or its IR's native code), with `NU` inputs, its own
+/// first: the model of a state count without generated code, and [`SizedModel`]'s third arm.
+pub(super) fn interpreted<const NX: usize, const NU: usize>(
+    resolved: &ResolvedModel,
+) -> Result<Interpreted<NX, NU>> {
+    Ok(Interpreted::with_native(
+        &resolved.ir,
+        &resolved.params,
+        resolved.native.clone(),
+    )?)
 }
 
 /// `$call` on whichever model `$self` holds, bound to `$m`.

@@ -480,13 +480,20 @@ pub const MAX_NX: usize = 12;
 pub const MAX_NU: usize = 4;
 
 fn unsupported(ir: &Ir) -> VisitError {
-    VisitError::Size(UnsupportedSize {
-        file: ir.file().to_string(),
-        nx: ir.nx(),
-        nu: ir.nu(),
-        max_nx: MAX_NX,
-        max_nu: MAX_NU,
-    })
+    VisitError::Size(UnsupportedSize::of(ir))
+}
+
+impl UnsupportedSize {
+    /// The error for `ir`, whose sizes are beyond [`MAX_NX`] states or [`MAX_NU`] inputs.
+    pub fn of(ir: &Ir) -> Self {
+        Self {
+            file: ir.file().to_string(),
+            nx: ir.nx(),
+            nu: ir.nu(),
+            max_nx: MAX_NX,
+            max_nu: MAX_NU,
+        }
+    }
 }
 
 /// Run `visitor` on the interpreted model of `ir` with `params` (IR order) and optional
