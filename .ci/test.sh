@@ -83,21 +83,30 @@ step "cargo build of every target in the release profile, with clippy's lints (-
 TWV_CLIPPY_DRIVER="$(rustup which clippy-driver 2>/dev/null || command -v clippy-driver)"
 export TWV_CLIPPY_DRIVER
 export RUSTC_WORKSPACE_WRAPPER="$PWD/.ci/clippy-rustc"
-# The `twv` of the tests has the JIT (`--runtime jit`, a cargo feature the main command's build
-# leaves out: see analysis/cli/Cargo.toml); every cargo command below names it, so none rebuilds.
-features=(--features twv-cli/jit)
 profile=(--profile release)
-cargo test --workspace --no-run "${profile[@]}" "${features[@]}"
+cargo test --workspace --no-run "${profile[@]}"
 step "cargo build of the libraries no test links (export runtime, firmware) and the benchmarks"
-cargo build --workspace --lib --benches "${profile[@]}" "${features[@]}"
+cargo build --workspace --lib --benches "${profile[@]}"
 twv="$PWD/target/release/twv"
+
+# The README's main command builds only `twv`; twv-unify (unify/Cargo.toml) gives that build the
+# feature set of the workspace's, so it finds every crate built above. Were a feature to differ,
+# it would compile the analysis crate again (~4 min) on a fresh clone: checked here, in seconds.
+step "the main command's build finds everything built (one feature set, unify/)"
+main_build="$(cargo build --release -p twv-cli --bin twv 2>&1)" || { echo "$main_build"; exit 1; }
+if grep -q "Compiling" <<<"$main_build"; then
+    echo "$main_build"
+    echo "the main command's build compiled crates again: a dependency's features differ between"
+    echo "it and the workspace's build; add them to unify/Cargo.toml (see its comment)"
+    exit 1
+fi
 
 # trybuild's compile-fail case builds the proc-macro's dependencies in a target folder of its
 # own (~50 s of one core): it runs in the background beside the doc tests and the Python
 # package, where a core is idle, instead of inside nextest. Both runs name what they ran.
 step "cargo nextest (every test binary, in parallel; the compile-fail case in the background)"
 compile_fail='test(=macro_errors_are_compile_errors)'
-cargo nextest run --workspace --cargo-profile release "${features[@]}" --no-fail-fast \
+cargo nextest run --workspace --cargo-profile release --no-fail-fast \
     -E "not $compile_fail"
 ( cargo nextest run -p twv-macros --cargo-profile release -E "$compile_fail" \
     >target/compile-fail-test.log 2>&1 ) &
@@ -130,7 +139,7 @@ step "Cortex-M4F under QEMU: the firmware's results have the host's bits (in the
 cortex_m_pid=$!
 
 step "cargo test --doc"
-cargo test --workspace --doc "${profile[@]}" "${features[@]}"
+cargo test --workspace --doc "${profile[@]}"
 
 # The fuzz targets, built with coverage instrumentation into target/fuzz/ (a build of their own),
 # a fixed number of runs each: beside the Python package too.

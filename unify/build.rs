@@ -1,0 +1,3 @@
+//! Empty: cargo counts build dependencies only for a crate with a build script (Cargo.toml says
+//! why this crate has them).
+fn main() {}
