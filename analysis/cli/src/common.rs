@@ -153,8 +153,8 @@ fn runtime(given: Option<&str>) -> IrRuntime {
             name: "none",
             compile: |_| {
                 Err(
-                    "this twv was built without the JIT: rebuild it with `--features jit` or \
-                     run `--runtime interpreter`"
+                    "this twv was built without the JIT (--no-default-features): rebuild it \
+                     with the default features or run `--runtime interpreter`"
                         .to_string(),
                 )
             },

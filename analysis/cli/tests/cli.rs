@@ -115,7 +115,8 @@ fn interpreter_and_generated_code_agree_through_the_cli() {
     assert_eq!(a.stdout, b.stdout, "bit-identical JSON");
 }
 
-/// A `twv` built without the `jit` feature says so for `--runtime jit` and names the way out.
+/// A `twv` built without the `jit` feature (`--no-default-features`) says so for `--runtime jit`
+/// and names the way out.
 #[cfg(not(feature = "jit"))]
 #[test]
 fn without_the_jit_feature_runtime_jit_names_the_feature() {
@@ -131,7 +132,11 @@ fn without_the_jit_feature_runtime_jit_names_the_feature() {
     ]);
     fails_with(
         &out,
-        &["without the JIT", "--features jit", "--runtime interpreter"],
+        &[
+            "without the JIT",
+            "default features",
+            "--runtime interpreter",
+        ],
     );
 }
 
