@@ -13,8 +13,8 @@ use crate::error::{Error, Result};
 use crate::integrate::{ClosedLoop, OpenLoop, VectorField};
 use crate::linear::eigenvalues;
 use crate::model::{
-    dispatch, dispatch_control, dispatch_steer_filtered, input_vector, state_vector, ControlTask,
-    ModelTask, ResolvedModel,
+    dispatch_control, dispatch_steer_filtered, dispatch_steered, input_vector, state_vector,
+    ControlTask, ModelTask, ResolvedModel,
 };
 use crate::output::Files;
 use crate::plot::{Curve, Figure, Grid, LineChart};
@@ -404,7 +404,7 @@ pub fn portraits(
                 };
                 let (abscissa, runs) = match law.rate_filter {
                     Some(_) => dispatch_steer_filtered(model, task)?,
-                    None => dispatch(model, task)?,
+                    None => dispatch_steered(model, task)?,
                 };
                 (None, None, Some(law), abscissa, runs)
             }

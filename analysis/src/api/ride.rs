@@ -14,8 +14,8 @@ use crate::control::{simulate as integrate, RunEnd, RunSettings, Trajectory};
 use crate::error::{Error, Result};
 use crate::integrate::{ClosedLoop, OpenLoop};
 use crate::model::{
-    dispatch, dispatch_steer_filtered, input_vector, state_vector, ControlTask, ModelTask,
-    ResolvedModel,
+    dispatch, dispatch_steer_filtered, dispatch_steered, input_vector, state_vector, ControlTask,
+    ModelTask, ResolvedModel,
 };
 use crate::output::Files;
 use crate::plot::{Curve, Figure, LineChart};
@@ -209,6 +209,18 @@ fn start<const NX: usize, const NU: usize>(
     Ok((watch, x0, u))
 }
 
+/// [`start`] and the steer law of `settings` on the model.
+fn steered_start<const NX: usize, const NU: usize>(
+    s: &RideSettings,
+    resolved: &ResolvedModel,
+    info: &ModelInfo,
+    settings: &SteerSettings,
+) -> Result<(usize, [f64; NX], SteerLaw<NX, NU>)> {
+    let (watch, x0, u) = start::<NX, NU>(s, resolved, info)?;
+    let law = SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, settings, u)?;
+    Ok((watch, x0, law))
+}
+
 impl ModelTask for Ride<'_> {
     type Output = RideResult;
     fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
@@ -219,16 +231,26 @@ impl ModelTask for Ride<'_> {
         let s = self.0;
         let info = model.info();
         let (watch, x0, u) = start::<NX, NU>(s, resolved, &info)?;
-        let traj = match &s.steer {
-            None => integrate(OpenLoop::new(model, u), &x0, watch, &s.run, self.1)?,
-            Some(settings) => {
-                let law =
-                    SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, settings, u)?;
-                integrate(ClosedLoop::new(model, law), &x0, watch, &s.run, self.1)?
-            }
-        };
-        let states: Vec<String> = info.states.iter().map(|n| n.to_string()).collect();
-        Ok(result(s, resolved, &info, &x0, watch, traj, states))
+        let traj = integrate(OpenLoop::new(model, u), &x0, watch, &s.run, self.1)?;
+        Ok(result(s, resolved, &info, &x0, watch, traj, Vec::new()))
+    }
+}
+
+/// A ride steered by a law without a rate filter.
+struct SteeredRide<'a>(&'a RideSettings, &'a dyn Progress, SteerSettings);
+
+impl ModelTask for SteeredRide<'_> {
+    type Output = RideResult;
+    fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
+        self,
+        model: &M,
+        resolved: &ResolvedModel,
+    ) -> Result<RideResult> {
+        let s = self.0;
+        let info = model.info();
+        let (watch, x0, law) = steered_start::<NX, NU>(s, resolved, &info, &self.2)?;
+        let traj = integrate(ClosedLoop::new(model, law), &x0, watch, &s.run, self.1)?;
+        Ok(result(s, resolved, &info, &x0, watch, traj, Vec::new()))
     }
 }
 
@@ -243,23 +265,27 @@ impl ControlTask for FilteredRide<'_> {
         model: &M,
         resolved: &ResolvedModel,
     ) -> Result<RideResult> {
-        let (s, settings) = (self.0, &self.2);
+        let s = self.0;
         let info = model.info();
-        let (watch, x0, u) = start::<NX, NU>(s, resolved, &info)?;
-        let law = SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, settings, u)?;
+        let (watch, x0, law) = steered_start::<NX, NU>(s, resolved, &info, &self.2)?;
         let field = FilteredSteer::<_, NX, NU, NA>::new(model, law)?;
         let xa = field.initial_state(&x0);
         let traj = integrate(field, &xa, watch, &s.run, self.1)?;
-        let mut states: Vec<String> = info.states.iter().map(|n| n.to_string()).collect();
-        states.extend(FilteredSteer::<M, NX, NU, NA>::filter_states(
-            info.states,
-            &law,
-        ));
-        Ok(result(s, resolved, &info, &x0, watch, traj, states))
+        let filter = FilteredSteer::<M, NX, NU, NA>::filter_states(info.states, &law);
+        Ok(result(
+            s,
+            resolved,
+            &info,
+            &x0,
+            watch,
+            traj,
+            filter.to_vec(),
+        ))
     }
 }
 
-/// The result of a run whose samples are `traj` over the states `states`.
+/// The result of a run whose samples are `traj` over the model's states and then `extra` (a
+/// controller's own states).
 fn result<const N: usize>(
     s: &RideSettings,
     resolved: &ResolvedModel,
@@ -267,12 +293,13 @@ fn result<const N: usize>(
     x0: &[f64],
     watch: usize,
     traj: Trajectory<N>,
-    states: Vec<String>,
+    extra: Vec<String>,
 ) -> RideResult {
     let watched = traj.component(watch);
     let (verdict, peak, tail_peak) = ride_verdict(&traj.end, &watched);
     let mut columns = vec!["t".to_string()];
-    columns.extend(states);
+    columns.extend(info.states.iter().map(|n| n.to_string()));
+    columns.extend(extra);
     let rows = traj
         .t
         .iter()
@@ -320,7 +347,8 @@ pub fn ride(
         Some(law) if law.rate_filter.is_some() => {
             dispatch_steer_filtered(model, FilteredRide(settings, progress, law))
         }
-        _ => dispatch(model, Ride(settings, progress)),
+        Some(law) => dispatch_steered(model, SteeredRide(settings, progress, law)),
+        None => dispatch(model, Ride(settings, progress)),
     }
 }
 

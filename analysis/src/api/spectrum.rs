@@ -12,8 +12,8 @@ use crate::error::{Error, Result};
 use crate::integrate::{ClosedLoop, OpenLoop, VectorField};
 use crate::lyapunov::{lyapunov_spectrum_observed, LyapunovResult, LyapunovSettings};
 use crate::model::{
-    dispatch, dispatch_control, dispatch_steer_filtered, input_vector, state_vector, ControlTask,
-    ModelTask, ResolvedModel,
+    dispatch, dispatch_control, dispatch_steer_filtered, dispatch_steered, input_vector,
+    state_vector, ControlTask, ModelTask, ResolvedModel,
 };
 use crate::output::Files;
 use crate::plot::{Curve, Figure, LineChart};
@@ -201,6 +201,9 @@ pub fn drift_states(model: &ResolvedModel) -> Vec<String> {
         .collect()
 }
 
+/// What each task returns: the start (x0, and u when open), the result and its timing.
+type Run = (Vec<f64>, Vec<f64>, LyapunovResult, Option<Timing>);
+
 struct Open<'a>(&'a SpectrumSettings, &'a dyn Progress);
 
 /// x0 and the constant inputs (0 unless given) of `s` on a model.
@@ -217,7 +220,24 @@ fn start<const NX: usize, const NU: usize>(
 }
 
 impl ModelTask for Open<'_> {
-    type Output = (Vec<f64>, Vec<f64>, LyapunovResult, Option<Timing>);
+    type Output = Run;
+    fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
+        self,
+        model: &M,
+        _: &ResolvedModel,
+    ) -> Result<Self::Output> {
+        let info = model.info();
+        let (x0, u) = start::<NX, NU>(self.0, &info)?;
+        let (result, timing) = timed(self.0, &OpenLoop::new(model, u), &x0, self.1)?;
+        Ok((x0.to_vec(), u[..info.inputs.len()].to_vec(), result, timing))
+    }
+}
+
+/// The spectrum of the model steered by a law without a rate filter.
+struct Steered<'a>(&'a SpectrumSettings, SteerSettings, &'a dyn Progress);
+
+impl ModelTask for Steered<'_> {
+    type Output = Run;
     fn run<const NX: usize, const NU: usize, M: Model<NX, NU>>(
         self,
         model: &M,
@@ -225,14 +245,8 @@ impl ModelTask for Open<'_> {
     ) -> Result<Self::Output> {
         let info = model.info();
         let (x0, u) = start::<NX, NU>(self.0, &info)?;
-        let (result, timing) = match &self.0.steer {
-            None => timed(self.0, &OpenLoop::new(model, u), &x0, self.1)?,
-            Some(settings) => {
-                let law =
-                    SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, settings, u)?;
-                timed(self.0, &ClosedLoop::new(model, law), &x0, self.1)?
-            }
-        };
+        let law = SteerLaw::<NX, NU>::for_model(resolved, info.states, info.inputs, &self.1, u)?;
+        let (result, timing) = timed(self.0, &ClosedLoop::new(model, law), &x0, self.2)?;
         Ok((x0.to_vec(), u[..info.inputs.len()].to_vec(), result, timing))
     }
 }
@@ -244,7 +258,7 @@ struct Closed<'a>(
 );
 
 impl ControlTask for Closed<'_> {
-    type Output = (Vec<f64>, Vec<f64>, LyapunovResult, Option<Timing>);
+    type Output = Run;
     fn run<const NX: usize, const NU: usize, const NA: usize, M: Model<NX, NU>>(
         self,
         model: &M,
@@ -264,7 +278,7 @@ impl ControlTask for Closed<'_> {
 struct FilteredSteered<'a>(&'a SpectrumSettings, SteerSettings, &'a dyn Progress);
 
 impl ControlTask for FilteredSteered<'_> {
-    type Output = (Vec<f64>, Vec<f64>, LyapunovResult, Option<Timing>);
+    type Output = Run;
     fn run<const NX: usize, const NU: usize, const NA: usize, M: Model<NX, NU>>(
         self,
         model: &M,
@@ -305,7 +319,6 @@ pub fn spectrum(
             "the spectrum needs an initial state (x0) or a speed",
         ));
     }
-    let steered = settings.steer.is_some();
     let ((x0, u, result, timing), name) = match (&settings.controller, settings.steer) {
         (Some(c), _) => (
             dispatch_control(model, c.n_states(), Closed(settings, c, progress))?,
@@ -315,13 +328,13 @@ pub fn spectrum(
             dispatch_steer_filtered(model, FilteredSteered(settings, law, progress))?,
             format!("{} (steered, rate filter)", model.name()),
         ),
-        (None, _) => (
+        (None, Some(law)) => (
+            dispatch_steered(model, Steered(settings, law, progress))?,
+            format!("{} (steered)", model.name()),
+        ),
+        (None, None) => (
             dispatch(model, Open(settings, progress))?,
-            if steered {
-                format!("{} (steered)", model.name())
-            } else {
-                model.name().to_string()
-            },
+            model.name().to_string(),
         ),
     };
     Ok(SpectrumResult {

@@ -116,24 +116,36 @@ pub fn dispatch_control<T: ControlTask>(
     }
 }
 
+/// Runs `task`, a steer law's work, on the resolved model. Only a model with a steer input has
+/// a steer law, and none is generated, so only an IR's state counts resolve: 9, the Whipple
+/// bicycle's (its measured variants included). The law's code is compiled for that count alone
+/// rather than for all twelve. Another count is one more literal in [`steerable`].
+pub fn dispatch_steered<T: ModelTask>(resolved: &ResolvedModel, task: T) -> Result<T::Output> {
+    steerable(resolved)?;
+    task.run(&interpreted::<9, MAX_NU>(resolved)?, resolved)
+}
+
 /// Runs `task` on the resolved model with NA = NX + 2: a steer law with a rate filter
-/// ([`crate::control::steer::FilteredSteer`]). Only a model with a steer input has one, and
-/// none is generated, so only an IR's state counts resolve: 9, the Whipple bicycle's (its
-/// measured variants included). Another count is one more literal in the match below.
+/// ([`crate::control::steer::FilteredSteer`]), on the state counts [`dispatch_steered`] has.
 pub fn dispatch_steer_filtered<T: ControlTask>(
     resolved: &ResolvedModel,
     task: T,
 ) -> Result<T::Output> {
+    steerable(resolved)?;
+    task.run::<9, MAX_NU, 11, _>(&interpreted::<9, MAX_NU>(resolved)?, resolved)
+}
+
+/// Whether a steer law can run on the resolved model: it has a steer input and a state count
+/// the steered jobs are compiled for.
+fn steerable(resolved: &ResolvedModel) -> Result<()> {
     crate::control::steer::steer_input(resolved.name(), &resolved.inputs())?;
     match (&resolved.engine, resolved.ir.nx()) {
-        (Engine::Interpreted | Engine::Jit, 9) => {
-            task.run::<9, MAX_NU, 11, _>(&interpreted::<9, MAX_NU>(resolved)?, resolved)
-        }
+        (Engine::Interpreted | Engine::Jit, 9) => Ok(()),
         (_, nx) => Err(Error::Unsupported {
             model: resolved.name().to_string(),
             reason: format!(
-                "a steer law with a rate filter runs on models of 9 states (the Whipple \
-                 bicycle's form); this one has {nx}: steer it without steer_filter"
+                "a steer law runs on models of 9 states (the Whipple bicycle's form); this \
+                 one has {nx}"
             ),
         }),
     }

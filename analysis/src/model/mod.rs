@@ -9,7 +9,9 @@ mod vector;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-pub use dispatch::{dispatch, dispatch_control, dispatch_steer_filtered, ControlTask, ModelTask};
+pub use dispatch::{
+    dispatch, dispatch_control, dispatch_steer_filtered, dispatch_steered, ControlTask, ModelTask,
+};
 pub use vector::{check_vector, input_vector, state_vector};
 
 use twv_ir::{Ir, NativeCode, SteadyMotion};

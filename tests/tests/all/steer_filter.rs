@@ -16,7 +16,7 @@ use twv_analysis::integrate::VectorField;
 use twv_analysis::jobs;
 use twv_analysis::linear::modes::eigenvalues;
 use twv_analysis::linear::SteerGains;
-use twv_analysis::model::ModelSpec;
+use twv_analysis::model::{ModelSource, ModelSpec};
 use twv_analysis::tune::steer::certify_steer;
 use twv_analysis::tune::TuneStatus;
 use twv_ir::Interpreted;
@@ -426,6 +426,53 @@ fn bad_filters_get_one_line_naming_the_option() {
     }
     let e = refused("phase", "whipple", vec![("steer_filter", json!(0.05))]);
     assert!(e.starts_with("steer_filter:"), "{e}");
+}
+
+/// The steered jobs are compiled for the bicycles' state count (9) alone: a model of another
+/// count that does have a steer input (vehicle8's IR with its second input renamed `T_delta`)
+/// gets one line naming its count, with or without the rate filter; without the rename it is
+/// refused for having no steer input, the check before it.
+#[test]
+fn a_steer_law_on_a_model_of_another_state_count_is_refused_by_name() {
+    let vehicle8 = twv_generated::ir_json("vehicle8").expect("vehicle8 is shipped");
+    let run = |ir_text: &str, job: &str, given: &[(&str, Value)]| -> String {
+        let ir = twv_ir::parse_ir(ir_text, "vehicle8 (steer input renamed)").unwrap();
+        let model = ModelSpec {
+            model: ModelSource::Ir(Box::new(ir)),
+            ..ModelSpec::default()
+        }
+        .resolve()
+        .unwrap();
+        let given: Vec<(String, Value)> = given
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect();
+        let prepared = jobs::find(job)
+            .unwrap()
+            .prepare_options(None, &given)
+            .unwrap();
+        let e = prepared.run(&model, &Silent).err().unwrap().to_string();
+        assert!(!e.contains('\n'), "{e}");
+        e
+    };
+    let steered = twv_ir::rehash(&vehicle8.replace("\"T2\"", "\"T_delta\""));
+    assert_ne!(steered, vehicle8, "vehicle8's IR names its input T2");
+    let gains = ("steer_gains", json!("k_phi_dot=15"));
+    let x0 = ("x0", json!([0.1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]));
+    let cases: [(&str, Vec<(&str, Value)>); 3] = [
+        ("ride", vec![gains.clone()]),
+        ("ride", vec![gains.clone(), ("steer_filter", json!(0.05))]),
+        ("lyapunov", vec![gains.clone(), x0]),
+    ];
+    for (job, given) in &cases {
+        let e = run(&steered, job, given);
+        assert!(
+            e.contains("9 states") && e.contains("this one has 8"),
+            "{job}: {e}"
+        );
+        let e = run(vehicle8, job, given);
+        assert!(e.contains("no steer input"), "{job}: {e}");
+    }
 }
 
 /// `lyapunov --speed 3 --steer-gains … --steer-filter τ`: the spectrum of the filtered closed
