@@ -4,6 +4,7 @@
 //! error of one line, and a result's summary never prints NaN.
 
 use proptest::prelude::*;
+use proptest::test_runner::RngSeed;
 use serde_json::{json, Value};
 use twv_analysis::api::Silent;
 use twv_analysis::error::one_line;
@@ -150,12 +151,24 @@ fn check(job: &'static dyn AnyJob, given: &[(String, Value)]) -> Result<(), Test
     Ok(())
 }
 
+/// The seed of the test command's cases (any fixed value: this one spells "twv").
+const FIXED_SEED: u64 = 0x0074_7776;
+
 #[test]
 fn every_jobs_options_are_refused_in_one_line_or_run_within_a_finite_budget() {
+    // A fixed seed, so the test command runs the same cases every time and a failure there is
+    // the change's, not the draw's; `PROPTEST_RNG_SEED=<n>` runs other cases (a random seed
+    // found the delay that took `linearize` minutes, see tests/all/linear.rs).
+    let defaults = ProptestConfig::default();
+    let rng_seed = match std::env::var_os("PROPTEST_RNG_SEED") {
+        Some(_) => defaults.rng_seed,
+        None => RngSeed::Fixed(FIXED_SEED),
+    };
     let config = ProptestConfig {
         cases: 48,
         failure_persistence: None,
-        ..ProptestConfig::default()
+        rng_seed,
+        ..defaults
     };
     for &job in registry() {
         if matches!(job.name(), "codegen" | "audit") {
