@@ -232,7 +232,7 @@ impl ModelTask for Ride<'_> {
         let info = model.info();
         let (watch, x0, u) = start::<NX, NU>(s, resolved, &info)?;
         let traj = integrate(OpenLoop::new(model, u), &x0, watch, &s.run, self.1)?;
-        Ok(result(s, resolved, &info, &x0, watch, traj, Vec::new()))
+        Ok(result(s, resolved, &info, &x0, watch, traj, &[]))
     }
 }
 
@@ -250,7 +250,7 @@ impl ModelTask for SteeredRide<'_> {
         let info = model.info();
         let (watch, x0, law) = steered_start::<NX, NU>(s, resolved, &info, &self.2)?;
         let traj = integrate(ClosedLoop::new(model, law), &x0, watch, &s.run, self.1)?;
-        Ok(result(s, resolved, &info, &x0, watch, traj, Vec::new()))
+        Ok(result(s, resolved, &info, &x0, watch, traj, &[]))
     }
 }
 
@@ -272,15 +272,7 @@ impl ControlTask for FilteredRide<'_> {
         let xa = field.initial_state(&x0);
         let traj = integrate(field, &xa, watch, &s.run, self.1)?;
         let filter = FilteredSteer::<M, NX, NU, NA>::filter_states(info.states, &law);
-        Ok(result(
-            s,
-            resolved,
-            &info,
-            &x0,
-            watch,
-            traj,
-            filter.to_vec(),
-        ))
+        Ok(result(s, resolved, &info, &x0, watch, traj, &filter))
     }
 }
 
@@ -293,13 +285,13 @@ fn result<const N: usize>(
     x0: &[f64],
     watch: usize,
     traj: Trajectory<N>,
-    extra: Vec<String>,
+    extra: &[String],
 ) -> RideResult {
     let watched = traj.component(watch);
     let (verdict, peak, tail_peak) = ride_verdict(&traj.end, &watched);
     let mut columns = vec!["t".to_string()];
     columns.extend(info.states.iter().map(|n| n.to_string()));
-    columns.extend(extra);
+    columns.extend_from_slice(extra);
     let rows = traj
         .t
         .iter()

@@ -12,7 +12,7 @@
 //! all with 2 inputs there.
 //! [`dispatch_steer_filtered`] does the same for a steer law's rate filter (NZ = 2).
 
-use twv_ir::{UnsupportedSize, MAX_NU};
+use twv_ir::{Interpreted, UnsupportedSize, MAX_NU};
 use twv_model::Model;
 
 use super::sized::{interpreted, Control7, Control8, Model3, Model4, Model7, Model8};
@@ -116,36 +116,38 @@ pub fn dispatch_control<T: ControlTask>(
     }
 }
 
-/// Runs `task`, a steer law's work, on the resolved model. Only a model with a steer input has
-/// a steer law, and none is generated, so only an IR's state counts resolve: 9, the Whipple
-/// bicycle's (its measured variants included). The law's code is compiled for that count alone
-/// rather than for all twelve. Another count is one more literal in [`steerable`].
+/// The one state count the steered jobs are compiled for: the Whipple bicycle's (its measured
+/// variants included). Only a model with a steer input has a steer law, none is generated, and
+/// every IR with one has this count, so the law's code is compiled for it alone rather than for
+/// all twelve.
+const STEERED_NX: usize = 9;
+
+/// Runs `task`, a steer law's work, on the resolved model (of [`STEERED_NX`] states).
 pub fn dispatch_steered<T: ModelTask>(resolved: &ResolvedModel, task: T) -> Result<T::Output> {
-    steerable(resolved)?;
-    task.run(&interpreted::<9, MAX_NU>(resolved)?, resolved)
+    task.run(&steered_model(resolved)?, resolved)
 }
 
 /// Runs `task` on the resolved model with NA = NX + 2: a steer law with a rate filter
-/// ([`crate::control::steer::FilteredSteer`]), on the state counts [`dispatch_steered`] has.
+/// ([`crate::control::steer::FilteredSteer`]), on a model of [`STEERED_NX`] states.
 pub fn dispatch_steer_filtered<T: ControlTask>(
     resolved: &ResolvedModel,
     task: T,
 ) -> Result<T::Output> {
-    steerable(resolved)?;
-    task.run::<9, MAX_NU, 11, _>(&interpreted::<9, MAX_NU>(resolved)?, resolved)
+    const NA: usize = STEERED_NX + 2;
+    task.run::<STEERED_NX, MAX_NU, NA, _>(&steered_model(resolved)?, resolved)
 }
 
-/// Whether a steer law can run on the resolved model: it has a steer input and a state count
-/// the steered jobs are compiled for.
-fn steerable(resolved: &ResolvedModel) -> Result<()> {
+/// The resolved model as the steered jobs' model type, if a steer law can run on it: it has a
+/// steer input and [`STEERED_NX`] states.
+fn steered_model(resolved: &ResolvedModel) -> Result<Interpreted<STEERED_NX, MAX_NU>> {
     crate::control::steer::steer_input(resolved.name(), &resolved.inputs())?;
     match (&resolved.engine, resolved.ir.nx()) {
-        (Engine::Interpreted | Engine::Jit, 9) => Ok(()),
+        (Engine::Interpreted | Engine::Jit, STEERED_NX) => interpreted(resolved),
         (_, nx) => Err(Error::Unsupported {
             model: resolved.name().to_string(),
             reason: format!(
-                "a steer law runs on models of 9 states (the Whipple bicycle's form); this \
-                 one has {nx}"
+                "a steer law runs on models of {STEERED_NX} states (the Whipple bicycle's \
+                 form); this one has {nx}"
             ),
         }),
     }
