@@ -81,6 +81,8 @@ where
     M: Model<NX, NU>,
     L: FeedbackLaw<NX, NU>,
 {
+    const COMPILED_IN: bool = M::COMPILED_IN;
+
     #[inline(always)]
     fn eval<const K: usize>(
         &self,

@@ -31,6 +31,15 @@
 /// Implementations must not allocate or panic; non-finite inputs give non-finite outputs (the
 /// integrators detect and report them).
 pub trait VectorField<const N: usize> {
+    /// Whether the field's model is compiled into the program ([`Model::COMPILED_IN`]): then
+    /// the integrators' steps run from a build for each instruction set, chosen by timing
+    /// ([`twv_kernels::isa::Calibration`]). A field that evaluates an IR at run time says
+    /// false, and the steps are built once: its calls cost microseconds, the combinations of
+    /// a step nanoseconds.
+    ///
+    /// [`Model::COMPILED_IN`]: twv_model::Model::COMPILED_IN
+    const COMPILED_IN: bool = true;
+
     /// ẋ = F(t, x) into `f` and `jw[k] = J(t, x) w[k]` for each of the `K` tangent vectors: the
     /// hot kernel, one call per integrator stage.
     fn eval<const K: usize>(
@@ -94,6 +103,8 @@ pub trait VectorField<const N: usize> {
 
 /// A borrowed field is a field, so a stepper can own `&F` while the caller keeps `F`.
 impl<const N: usize, F: VectorField<N> + ?Sized> VectorField<N> for &F {
+    const COMPILED_IN: bool = F::COMPILED_IN;
+
     #[inline(always)]
     fn eval<const K: usize>(
         &self,

@@ -127,13 +127,18 @@ pub(crate) fn rk4_step_lanes<const N: usize, const L: usize>(
         t_end[l] = t[l] + h[l];
         sixth[l] = h[l] / 6.0;
     }
-    field.eval(t, y, k);
-    stage(acc, tmp, y, k, &half, true);
-    field.eval(&t_half, tmp, k);
-    stage(acc, tmp, y, k, &half, false);
-    field.eval(&t_half, tmp, k);
-    stage(acc, tmp, y, k, h, false);
-    field.eval(&t_end, tmp, k);
+    // One loop over the stages, the field (the lanes kernel, inlined) written once, as in
+    // `Rk4::rk4_step`.
+    let times = [t, &t_half, &t_half, &t_end];
+    let to_next = [&half, &half, h];
+    for s in 0..4 {
+        let at = if s == 0 { &*y } else { &*tmp };
+        field.eval(times[s], at, k);
+        if s == 3 {
+            break;
+        }
+        stage(acc, tmp, y, k, to_next[s], s == 0);
+    }
     // `y += h/6 (acc + k)` with a `v · 0` sum per point: finite → 0, else NaN.
     let mut check = [0.0; L];
     for ((s, a), k) in y.rows_mut().iter_mut().zip(acc.rows()).zip(k.rows()) {

@@ -33,6 +33,8 @@ impl<M, const NX: usize, const NU: usize> VectorField<NX> for OpenLoop<'_, M, NU
 where
     M: Model<NX, NU>,
 {
+    const COMPILED_IN: bool = M::COMPILED_IN;
+
     #[inline(always)]
     fn eval<const K: usize>(
         &self,

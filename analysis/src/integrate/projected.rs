@@ -29,6 +29,8 @@ pub fn project<const N: usize>(keep: &[bool; N], w: &mut [f64; N]) {
 }
 
 impl<F: VectorField<N>, const N: usize> VectorField<N> for Projected<F, N> {
+    const COMPILED_IN: bool = F::COMPILED_IN;
+
     #[inline(always)]
     fn eval<const K: usize>(
         &self,

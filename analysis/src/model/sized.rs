@@ -256,6 +256,9 @@ where
     A: Model<NX, NU>,
     B: Model<NX, NU>,
 {
+    /// Compiled in when a shipped model's generated code is one of its arms.
+    const COMPILED_IN: bool = A::COMPILED_IN || B::COMPILED_IN;
+
     forward_model!(
         #[inline]
         each
@@ -270,6 +273,8 @@ where
 pub struct OutOfLine<M>(pub M);
 
 impl<M: Model<NX, NU>, const NX: usize, const NU: usize> Model<NX, NU> for OutOfLine<M> {
+    const COMPILED_IN: bool = M::COMPILED_IN;
+
     forward_model!(
         #[inline(never)]
         inner

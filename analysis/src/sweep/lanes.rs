@@ -329,16 +329,22 @@ where
     G: LoopGroup<'a, M, NX, NU, NA, L>,
     M: Model<NX, NU>,
 {
+    // For a model that evaluates an IR the builds per instruction set are never instantiated
+    // (a constant per model type, `Model::COMPILED_IN`).
     #[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
-    match twv_kernels::isa::current() {
-        // SAFETY: `current` returns AVX-512 only when the CPU and the OS support AVX-512F and
-        // AVX-512VL.
-        twv_kernels::isa::Isa::Avx512 => {
-            return unsafe { drive_avx512(group, loops, x0, s, indices) }
+    if M::COMPILED_IN {
+        match twv_kernels::isa::current() {
+            // SAFETY: `current` returns AVX-512 only when the CPU and the OS support AVX-512F
+            // and AVX-512VL.
+            twv_kernels::isa::Isa::Avx512 => {
+                return unsafe { drive_avx512(group, loops, x0, s, indices) }
+            }
+            // SAFETY: `current` returns AVX2 only when the CPU and the OS support it.
+            twv_kernels::isa::Isa::Avx2 => {
+                return unsafe { drive_avx2(group, loops, x0, s, indices) }
+            }
+            twv_kernels::isa::Isa::Neon | twv_kernels::isa::Isa::Baseline => {}
         }
-        // SAFETY: `current` returns AVX2 only when the CPU and the OS support it.
-        twv_kernels::isa::Isa::Avx2 => return unsafe { drive_avx2(group, loops, x0, s, indices) },
-        twv_kernels::isa::Isa::Neon | twv_kernels::isa::Isa::Baseline => {}
     }
     drive_inline(group, loops, x0, s, indices)
 }

@@ -302,6 +302,9 @@ impl<const NX: usize, const NU: usize> Interpreted<NX, NU> {
 }
 
 impl<const NX: usize, const NU: usize> Model<NX, NU> for Interpreted<NX, NU> {
+    /// Every call evaluates the IR (interpreted or through its native code).
+    const COMPILED_IN: bool = false;
+
     fn info(&self) -> ModelInfo {
         self.program.info
     }

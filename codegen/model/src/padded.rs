@@ -34,6 +34,8 @@ impl<M, const NX: usize, const NU: usize, const P: usize> Model<NX, P> for Padde
 where
     M: Model<NX, NU>,
 {
+    const COMPILED_IN: bool = M::COMPILED_IN;
+
     #[inline]
     fn info(&self) -> ModelInfo {
         self.0.info()
@@ -163,6 +165,9 @@ where
 pub enum NoModel {}
 
 impl<const NX: usize, const NU: usize> Model<NX, NU> for NoModel {
+    /// No code at all: it adds nothing to the other slots of an enum of models.
+    const COMPILED_IN: bool = false;
+
     fn info(&self) -> ModelInfo {
         match *self {}
     }

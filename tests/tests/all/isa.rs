@@ -236,3 +236,40 @@ fn isa_detection_matches_std_and_can_be_forced() {
     );
     twv_kernels::isa::force_baseline(false);
 }
+
+/// The integrators' steps and the maps' lanes driver are built per instruction set only for
+/// models compiled into the program: the constant that decides it is true for generated code,
+/// false for an IR's own type (interpreter or JIT), and every field around a model passes its
+/// model's on.
+#[test]
+fn only_compiled_in_models_get_builds_of_the_steps_per_instruction_set() {
+    use twv_analysis::integrate::{OpenLoop, Projected, VectorField};
+    use twv_ir::Interpreted;
+    use twv_model::Model;
+
+    fn field<F: VectorField<N>, const N: usize>(_: &F) -> bool {
+        F::COMPILED_IN
+    }
+    fn model<M: Model<NX, NU>, const NX: usize, const NU: usize>(_: &M) -> bool {
+        M::COMPILED_IN
+    }
+
+    let generated = Vehicle8::with_defaults();
+    assert!(model(&generated));
+    let open = OpenLoop::new(&generated, [0.0; 2]);
+    assert!(field(&open) && field(&&open));
+    assert!(field(&Projected {
+        field: &open,
+        keep: [true; 8]
+    }));
+
+    let ir = crate::codegen::shipped_ir("lorenz");
+    let interpreted = Interpreted::<3, 0>::with_defaults(&ir).expect("3 states, no inputs");
+    assert!(!model(&interpreted));
+    let open = OpenLoop::new(&interpreted, []);
+    assert!(!field(&open) && !field(&&open));
+    assert!(!field(&Projected {
+        field: &open,
+        keep: [true; 3]
+    }));
+}

@@ -120,6 +120,8 @@ impl<M, const NX: usize, const NU: usize, const NA: usize> VectorField<NA>
 where
     M: Model<NX, NU>,
 {
+    const COMPILED_IN: bool = M::COMPILED_IN;
+
     #[inline(always)]
     fn eval<const K: usize>(
         &self,
