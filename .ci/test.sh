@@ -4,6 +4,28 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 step() { printf '\n== %s  [%ds]\n' "$*" "$SECONDS"; }
+# Runs COMMAND in a subshell and appends its wall and CPU seconds (user + system of every process
+# it waited for) to target/step-times.txt, which the last step prints: each run says where its
+# time went. Returns COMMAND's status.
+timed() { # NAME COMMAND...
+    local name="$1"
+    shift
+    (
+        start=$SECONDS
+        status=0
+        "$@" || status=$?
+        # `times` in this shell (not a command substitution, which would be a fresh process):
+        # its second line is the children's user and system time, as 1m2.345s.
+        record="target/.times.$BASHPID"
+        times >"$record"
+        cpu=$(awk 'NR == 2 { for (i = 1; i <= 2; i++) { split($i, a, "m"); sub("s", "", a[2]);
+            n += a[1] * 60 + a[2] } printf "%.0f", n }' "$record")
+        rm -f "$record"
+        printf '%6d s CPU %6d s wall  %s\n' "$cpu" $((SECONDS - start)) "$name" \
+            >>target/step-times.txt
+        exit "$status"
+    )
+}
 # Waits for a test started in the background, prints its log, and stops here if it failed.
 finish() { # NAME PID LOG
     local status=0
@@ -24,8 +46,10 @@ else
     echo "AVX-512F/VL: no (the AVX-512 comparisons are skipped and say so)"
 fi
 
+mkdir -p target
+: >target/step-times.txt
 step "python environment (.venv, pinned)"
-bash .ci/setup-python.sh
+timed "python environment" bash .ci/setup-python.sh
 py=.venv/bin/python
 
 step "ruff"
@@ -37,21 +61,20 @@ step "ruff"
 # QEMU's Arm system emulator for the Cortex-M test at the end, installed while Rust builds (one
 # after the other: apt holds a lock).
 step "Slurm, MUNGE, Chromium, ChromeDriver, aarch64 and Cortex-M packages (in the background)"
-mkdir -p target
-( bash .ci/slurm-test.sh --install-only && bash .ci/browser-test.sh --install-only &&
-    bash .ci/aarch64-test.sh --install-only && bash .ci/cortex-m-test.sh --install-only ) \
+( timed "system packages" bash -c 'bash .ci/slurm-test.sh --install-only && bash .ci/browser-test.sh --install-only &&
+    bash .ci/aarch64-test.sh --install-only && bash .ci/cortex-m-test.sh --install-only' ) \
     >target/slurm-install.log 2>&1 &
 slurm_install_pid=$!
 
 # The book (mdBook, installed pinned into target/tools the first time, ~2 min 40 s of one core)
 # and its links: it needs nothing of the Rust build, so it starts first, beside the builds.
 step "docs: the book builds and every link resolves (in the background)"
-( bash .ci/docs-test.sh >target/docs-test.log 2>&1 ) &
+( timed docs bash .ci/docs-test.sh >target/docs-test.log 2>&1 ) &
 docs_pid=$!
 
 step "pytest modeling/"
 # Two workers, each test module on one (its derived models are cached per process): ~37 s -> ~24 s.
-"$py" -m pytest -q -p no:cacheprovider -n 2 --dist loadfile modeling/tests
+timed "pytest modeling" "$py" -m pytest -q -p no:cacheprovider -n 2 --dist loadfile modeling/tests
 
 step "IR freshness (generated/ir is what the modeling code derives today)"
 "$py" -m twv_modeling check
@@ -84,9 +107,9 @@ TWV_CLIPPY_DRIVER="$(rustup which clippy-driver 2>/dev/null || command -v clippy
 export TWV_CLIPPY_DRIVER
 export RUSTC_WORKSPACE_WRAPPER="$PWD/.ci/clippy-rustc"
 profile=(--profile release)
-cargo test --workspace --no-run "${profile[@]}"
+timed "linted build" cargo test --workspace --no-run "${profile[@]}"
 step "cargo build of the libraries no test links (export runtime, firmware) and the benchmarks"
-cargo build --workspace --lib --benches "${profile[@]}"
+timed "libraries, benchmarks" cargo build --workspace --lib --benches "${profile[@]}"
 twv="$PWD/target/release/twv"
 
 # The README's main command builds only `twv`; twv-unify (unify/Cargo.toml) gives that build the
@@ -106,9 +129,9 @@ fi
 # package, where a core is idle, instead of inside nextest. Both runs name what they ran.
 step "cargo nextest (every test binary, in parallel; the compile-fail case in the background)"
 compile_fail='test(=macro_errors_are_compile_errors)'
-cargo nextest run --workspace --cargo-profile release --no-fail-fast \
+timed nextest cargo nextest run --workspace --cargo-profile release --no-fail-fast \
     -E "not $compile_fail"
-( cargo nextest run -p twv-macros --cargo-profile release -E "$compile_fail" \
+( timed "compile-fail" cargo nextest run -p twv-macros --cargo-profile release -E "$compile_fail" \
     >target/compile-fail-test.log 2>&1 ) &
 compile_fail_pid=$!
 
@@ -119,32 +142,32 @@ if ! wait "$slurm_install_pid"; then
     echo "installing Slurm, MUNGE, Chromium, the aarch64 cross tools or QEMU for Arm failed"
     exit 1
 fi
-( bash .ci/slurm-test.sh "$twv" >target/slurm-test.log 2>&1 ) &
+( timed Slurm bash .ci/slurm-test.sh "$twv" >target/slurm-test.log 2>&1 ) &
 slurm_pid=$!
 
 # The browser test mostly waits on Chromium and the server: beside them too.
 step "twv serve in a real browser: headless Chromium through WebDriver (in the background)"
-( bash .ci/browser-test.sh "$twv" >target/browser-test.log 2>&1 ) &
+( timed browser bash .ci/browser-test.sh "$twv" >target/browser-test.log 2>&1 ) &
 browser_pid=$!
 
 # The aarch64 cross build and its emulated tests: beside the doc tests and the Python package,
 # which leave a core idle much of the time.
 step "aarch64: cross-build for aarch64, run the NEON tests under qemu (in the background)"
-( bash .ci/aarch64-test.sh "$twv" >target/aarch64-test.log 2>&1 ) &
+( timed aarch64 bash .ci/aarch64-test.sh "$twv" >target/aarch64-test.log 2>&1 ) &
 aarch64_pid=$!
 
 # The firmware crate built for a Cortex-M4F and run under QEMU's system emulation: beside them.
 step "Cortex-M4F under QEMU: the firmware's results have the host's bits (in the background)"
-( bash .ci/cortex-m-test.sh "$twv" >target/cortex-m-test.log 2>&1 ) &
+( timed Cortex-M bash .ci/cortex-m-test.sh "$twv" >target/cortex-m-test.log 2>&1 ) &
 cortex_m_pid=$!
 
 step "cargo test --doc"
-cargo test --workspace --doc "${profile[@]}"
+timed "doc tests" cargo test --workspace --doc "${profile[@]}"
 
 # The fuzz targets, built with coverage instrumentation into target/fuzz/ (a build of their own),
 # a fixed number of runs each: beside the Python package too.
 step "fuzzing: every fuzz target, a fixed number of runs from its corpus (in the background)"
-( TWV_FUZZ_RUNS=100000 bash .ci/fuzz.sh >target/fuzz-test.log 2>&1 ) &
+( TWV_FUZZ_RUNS=100000 timed fuzzing bash .ci/fuzz.sh >target/fuzz-test.log 2>&1 ) &
 fuzz_pid=$!
 
 step "python package: the release build of the extension into .venv (maturin), pytest python/tests"
@@ -152,8 +175,10 @@ step "python package: the release build of the extension into .venv (maturin), p
 # map ~20 times slower than the CLI); its tests check that it is (TWV_EXPECT_PROFILE). It reuses
 # the release build above. --uv: the .venv's pinned uv installs the extension (pip resolving its
 # dependencies took ~20 s).
-PATH="$PWD/.venv/bin:$PATH" VIRTUAL_ENV="$PWD/.venv" .venv/bin/maturin develop --release --uv --quiet -m python/Cargo.toml
-TWV_BIN="$twv" TWV_EXPECT_PROFILE=release "$py" -m pytest -q -p no:cacheprovider python/tests
+PATH="$PWD/.venv/bin:$PATH" VIRTUAL_ENV="$PWD/.venv" timed "python package build" \
+    .venv/bin/maturin develop --release --uv --quiet -m python/Cargo.toml
+TWV_BIN="$twv" TWV_EXPECT_PROFILE=release timed "pytest python" \
+    "$py" -m pytest -q -p no:cacheprovider python/tests
 
 step "the browser test: the page's plots and margins are the CLI's for the dragged gains (its log)"
 finish "the browser test" "$browser_pid" target/browser-test.log
@@ -175,5 +200,12 @@ finish "the aarch64 test" "$aarch64_pid" target/aarch64-test.log
 
 step "Cortex-M4F under QEMU: same bits as the host, instructions per RK4 step (its log)"
 finish "the Cortex-M test" "$cortex_m_pid" target/cortex-m-test.log
+
+step "where the time went (wall and CPU seconds of each step; background steps overlap)"
+sort -n -r target/step-times.txt
+times >target/.times.all
+awk 'NR == 2 { for (i = 1; i <= 2; i++) { split($i, a, "m"); sub("s", "", a[2]); n += a[1] * 60 + a[2] }
+    printf "the whole run: %d s wall, %.0f s CPU\n", '"$SECONDS"', n }' target/.times.all
+rm -f target/.times.all
 
 step "done"
