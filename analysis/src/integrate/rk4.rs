@@ -125,18 +125,12 @@ impl<F: VectorField<N>, const N: usize, const K: usize> Rk4<F, N, K> {
             if stage == 3 {
                 break;
             }
-            let c = to_next[stage];
-            if stage == 0 {
-                acc.zip_pair(tmp, y, k, |a, s, y, k| {
-                    *a = k;
-                    *s = y + c * k;
-                });
-            } else {
-                acc.zip_pair(tmp, y, k, |a, s, y, k| {
-                    *a += 2.0 * k;
-                    *s = y + c * k;
-                });
-            }
+            // acc = k, then acc += 2 k; the next stage's point tmp = y + c k.
+            let (c, first) = (to_next[stage], stage == 0);
+            acc.zip_pair(tmp, y, k, |a, s, y, k| {
+                *a = if first { k } else { *a + 2.0 * k };
+                *s = y + c * k;
+            });
         }
         y.add_sum_checked(h / 6.0, acc, k)
     }

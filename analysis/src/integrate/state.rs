@@ -52,32 +52,11 @@ impl<const N: usize, const K: usize> VarState<N, K> {
         unsafe { core::slice::from_raw_parts_mut((self as *mut Self).cast::<f64>(), Self::LEN) }
     }
 
-    /// Applies `op` to every component of `self` with the matching component of `a`.
+    /// Applies `op` to every component of the two outputs `self`, `b` and the inputs `c`, `d`:
+    /// two results from one pass over memory.
     ///
     /// One flat loop over the contiguous block (rather than nested loops over x and the rows of
     /// w) is what lets the compiler vectorise the stage arithmetic.
-    #[inline(always)]
-    pub(crate) fn zip1(&mut self, a: &Self, mut op: impl FnMut(&mut f64, f64)) {
-        for (s, a) in self.as_mut_slice().iter_mut().zip(a.as_slice()) {
-            op(s, *a);
-        }
-    }
-
-    /// Applies `op` to every component of `self` with the matching components of `a` and `b`.
-    #[inline(always)]
-    pub(crate) fn zip2(&mut self, a: &Self, b: &Self, mut op: impl FnMut(&mut f64, f64, f64)) {
-        for ((s, a), b) in self
-            .as_mut_slice()
-            .iter_mut()
-            .zip(a.as_slice())
-            .zip(b.as_slice())
-        {
-            op(s, *a, *b);
-        }
-    }
-
-    /// Applies `op` to every component of the two outputs `self`, `b` and the inputs `c`, `d`:
-    /// two results from one pass over memory.
     #[inline(always)]
     pub(crate) fn zip_pair(
         &mut self,
@@ -122,18 +101,6 @@ impl<const N: usize, const K: usize> VarState<N, K> {
             lanes[0] += *s * 0.0;
         }
         lanes.iter().sum::<f64>().is_finite()
-    }
-
-    /// `self = y + h k`.
-    #[inline(always)]
-    pub(crate) fn set_axpy(&mut self, y: &Self, h: f64, k: &Self) {
-        self.zip2(y, k, |s, y, k| *s = y + h * k);
-    }
-
-    /// `self += a k`.
-    #[inline(always)]
-    pub(crate) fn add_scaled(&mut self, a: f64, k: &Self) {
-        self.zip1(k, |s, k| *s += a * k);
     }
 
     /// Which part is non-finite, if any (NaN or ±∞ anywhere).

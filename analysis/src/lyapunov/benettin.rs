@@ -1,11 +1,12 @@
 //! The Benettin–QR driver.
 //!
-//! Only the integration loop is generic over the system (`N`, `K`, the stepper): what each
-//! interval records and everything after the loop — sorting, standard errors, the
-//! classification — is one non-generic [`Measurement`] on slices, so the hundreds of (model,
-//! exponent count, integrator) combinations the binary dispatches to share one copy of it.
+//! Only the stepper is generic over the model: the loop over intervals sees it as a
+//! `dyn` [`Driven`], so it is compiled once per `(N, K)`, and what each interval records and
+//! everything after the loop — sorting, standard errors, the classification — is one
+//! non-generic [`Measurement`] on slices, so the hundreds of (model, exponent count,
+//! integrator) combinations the binary dispatches to share one copy of it.
 
-use crate::integrate::{Dopri5, Rk4, Stepper, VectorField};
+use crate::integrate::{Dopri5, IntegrateError, Rk4, Stepper, VarState, VectorField};
 use crate::progress::{Progress, Silent};
 
 use super::classify::{classify, SignRule};
@@ -75,6 +76,43 @@ where
     run(stepper, settings, &Silent)
 }
 
+/// What the interval loop needs of a stepper, object-safe: the loop takes it as `dyn`, one
+/// indirect call per interval, and is compiled once per `(N, K)` instead of once per stepper.
+trait Driven<const N: usize, const K: usize> {
+    fn t(&self) -> f64;
+    fn state(&self) -> &VarState<N, K>;
+    fn set_tangents(&mut self, w: &[[f64; N]; K]);
+    fn advance_to(&mut self, t_end: f64) -> Result<(), IntegrateError>;
+    fn steps(&self) -> u64;
+    fn integrates_trace(&self) -> bool;
+    /// The field's right-hand side at `(t, x)`.
+    fn rhs(&self, t: f64, x: &[f64; N], out: &mut [f64; N]);
+}
+
+impl<S: Stepper<N, K>, const N: usize, const K: usize> Driven<N, K> for S {
+    fn t(&self) -> f64 {
+        Stepper::t(self)
+    }
+    fn state(&self) -> &VarState<N, K> {
+        Stepper::state(self)
+    }
+    fn set_tangents(&mut self, w: &[[f64; N]; K]) {
+        Stepper::set_tangents(self, w)
+    }
+    fn advance_to(&mut self, t_end: f64) -> Result<(), IntegrateError> {
+        Stepper::advance_to(self, t_end)
+    }
+    fn steps(&self) -> u64 {
+        Stepper::steps(self)
+    }
+    fn integrates_trace(&self) -> bool {
+        Stepper::integrates_trace(self)
+    }
+    fn rhs(&self, t: f64, x: &[f64; N], out: &mut [f64; N]) {
+        self.field().rhs(t, x, out)
+    }
+}
+
 fn run<S, const N: usize, const K: usize>(
     mut stepper: S,
     settings: &LyapunovSettings,
@@ -83,6 +121,15 @@ fn run<S, const N: usize, const K: usize>(
 where
     S: Stepper<N, K>,
 {
+    drive(&mut stepper, settings, progress)
+}
+
+#[inline(never)]
+fn drive<const N: usize, const K: usize>(
+    stepper: &mut dyn Driven<N, K>,
+    settings: &LyapunovSettings,
+    progress: &dyn Progress,
+) -> Result<LyapunovResult, LyapunovError> {
     settings.validate()?;
     check_count::<N, K>()?;
     let t_sample = settings.t_sample;
@@ -106,7 +153,7 @@ where
     };
     for i in 1..=ends.n_transient {
         stepper.advance_to(ends.end(i))?;
-        reorthonormalize(&mut stepper)?;
+        reorthonormalize(stepper)?;
         interval_done()?;
     }
 
@@ -123,9 +170,9 @@ where
     for i in 1..=settings.iterations {
         let t_prev = stepper.t();
         stepper.advance_to(ends.end(ends.n_transient + i))?;
-        let r = reorthonormalize(&mut stepper)?;
+        let r = reorthonormalize(stepper)?;
         let (t, y) = (stepper.t(), stepper.state());
-        stepper.field().rhs(t, &y.x, &mut f);
+        stepper.rhs(t, &y.x, &mut f);
         measure.interval(i, &r, t_prev, t, y.trace_integral);
         measure.max_speed = measure.max_speed.max(norm(&f));
         measure.max_norm = measure.max_norm.max(norm(&y.x));
@@ -312,12 +359,9 @@ impl Measurement {
 }
 
 /// Replaces the stepper's tangents by Q of their QR and returns R's (positive) diagonal.
-fn reorthonormalize<S, const N: usize, const K: usize>(
-    stepper: &mut S,
-) -> Result<[f64; K], LyapunovError>
-where
-    S: Stepper<N, K>,
-{
+fn reorthonormalize<const N: usize, const K: usize>(
+    stepper: &mut dyn Driven<N, K>,
+) -> Result<[f64; K], LyapunovError> {
     let mut w = stepper.state().w;
     let r = orthonormalize(&mut w);
     if let Some(index) = r.iter().position(|r| !(r.is_finite() && *r > 0.0)) {
