@@ -4,6 +4,13 @@
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 step() { printf '\n== %s  [%ds]\n' "$*" "$SECONDS"; }
+# The children's CPU seconds (user + system) in the output of bash's `times`, saved to FILE: its
+# second line, as 1m2.345s 0m0.678s. (`times` itself must run in the shell measured, not in a
+# command substitution, which is a fresh process.)
+children_cpu() { # FILE
+    awk 'NR == 2 { for (i = 1; i <= 2; i++) { split($i, a, "m"); sub("s", "", a[2]);
+        n += a[1] * 60 + a[2] } printf "%.0f", n }' "$1"
+}
 # Runs COMMAND in a subshell and appends its wall and CPU seconds (user + system of every process
 # it waited for) to target/step-times.txt, which the last step prints: each run says where its
 # time went. Returns COMMAND's status.
@@ -14,12 +21,9 @@ timed() { # NAME COMMAND...
         start=$SECONDS
         status=0
         "$@" || status=$?
-        # `times` in this shell (not a command substitution, which would be a fresh process):
-        # its second line is the children's user and system time, as 1m2.345s.
         record="target/.times.$BASHPID"
         times >"$record"
-        cpu=$(awk 'NR == 2 { for (i = 1; i <= 2; i++) { split($i, a, "m"); sub("s", "", a[2]);
-            n += a[1] * 60 + a[2] } printf "%.0f", n }' "$record")
+        cpu=$(children_cpu "$record")
         rm -f "$record"
         printf '%6d s CPU %6d s wall  %s\n' "$cpu" $((SECONDS - start)) "$name" \
             >>target/step-times.txt
@@ -204,8 +208,7 @@ finish "the Cortex-M test" "$cortex_m_pid" target/cortex-m-test.log
 step "where the time went (wall and CPU seconds of each step; background steps overlap)"
 sort -n -r target/step-times.txt
 times >target/.times.all
-awk 'NR == 2 { for (i = 1; i <= 2; i++) { split($i, a, "m"); sub("s", "", a[2]); n += a[1] * 60 + a[2] }
-    printf "the whole run: %d s wall, %.0f s CPU\n", '"$SECONDS"', n }' target/.times.all
+echo "the whole run: $SECONDS s wall, $(children_cpu target/.times.all) s CPU"
 rm -f target/.times.all
 
 step "done"

@@ -52,11 +52,13 @@ where
     let w0 = initial_basis::<N, K>(&settings.basis);
     let trace = settings.trace_check;
     match settings.integrator {
-        IntegratorChoice::Rk4 { h } => {
-            run(Rk4::new(field, 0.0, *x0, w0, h, trace)?, settings, progress)
-        }
-        IntegratorChoice::Dopri(opts) => run(
-            Dopri5::new(field, 0.0, *x0, w0, opts, trace)?,
+        IntegratorChoice::Rk4 { h } => drive(
+            &mut Rk4::new(field, 0.0, *x0, w0, h, trace)?,
+            settings,
+            progress,
+        ),
+        IntegratorChoice::Dopri(opts) => drive(
+            &mut Dopri5::new(field, 0.0, *x0, w0, opts, trace)?,
             settings,
             progress,
         ),
@@ -67,13 +69,13 @@ where
 /// `settings.integrator` and `settings.basis` are then ignored, and `mean_trace` is reported
 /// only if both `settings.trace_check` and the stepper's trace quadrature are on.
 pub fn lyapunov_spectrum_with<S, const N: usize, const K: usize>(
-    stepper: S,
+    mut stepper: S,
     settings: &LyapunovSettings,
 ) -> Result<LyapunovResult, LyapunovError>
 where
     S: Stepper<N, K>,
 {
-    run(stepper, settings, &Silent)
+    drive(&mut stepper, settings, &Silent)
 }
 
 /// What the interval loop needs of a stepper, object-safe: the loop takes it as `dyn`, one
@@ -113,17 +115,7 @@ impl<S: Stepper<N, K>, const N: usize, const K: usize> Driven<N, K> for S {
     }
 }
 
-fn run<S, const N: usize, const K: usize>(
-    mut stepper: S,
-    settings: &LyapunovSettings,
-    progress: &dyn Progress,
-) -> Result<LyapunovResult, LyapunovError>
-where
-    S: Stepper<N, K>,
-{
-    drive(&mut stepper, settings, progress)
-}
-
+/// The transient and the measured intervals of one run: one copy per `(N, K)`.
 #[inline(never)]
 fn drive<const N: usize, const K: usize>(
     stepper: &mut dyn Driven<N, K>,

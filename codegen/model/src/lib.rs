@@ -60,7 +60,7 @@ pub struct ParamInfo {
 
 /// A model ẋ = f(x, u) with its Jacobians.
 pub trait Model<const NX: usize, const NU: usize> {
-    /// Whether the model's functions can be Rust compiled into the program (generated or
+    /// Whether the model's functions are Rust compiled into the program (generated or
     /// written by hand), a few nanoseconds a call: then the code around them (the integrators'
     /// steps) is worth building once per instruction set. False for a model that only
     /// evaluates an IR at run time (the interpreter, or its native code), whose calls cost
