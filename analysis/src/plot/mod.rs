@@ -47,7 +47,15 @@ pub(crate) fn font(px: u32, k: u32) -> (&'static str, u32) {
 
 /// A tick label as plotters prints it, but never "-0.0": a key point a rounding error below zero
 /// reads as zero.
-pub(crate) fn tick(value: &f64) -> String {
+///
+/// ```
+/// use twv_analysis::plot::tick;
+/// assert_eq!(tick(&-1e-17), "0.0");
+/// assert_eq!(tick(&-0.0), "0.0");
+/// assert_eq!(tick(&-0.2), "-0.2");
+/// assert_eq!(tick(&400.0), "400.0");
+/// ```
+pub fn tick(value: &f64) -> String {
     use plotters::coord::ranged1d::ValueFormatter;
     let text = plotters::coord::types::RangedCoordf64::format(value);
     match text.strip_prefix('-') {
@@ -149,16 +157,3 @@ pub(crate) const COLORS: [RGBColor; 10] = [
     RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
 ];
-
-#[cfg(test)]
-mod tests {
-    use super::tick;
-
-    #[test]
-    fn a_tick_a_rounding_error_below_zero_reads_zero() {
-        assert_eq!(tick(&-1e-17), "0.0");
-        assert_eq!(tick(&-0.0), "0.0");
-        assert_eq!(tick(&-0.2), "-0.2");
-        assert_eq!(tick(&400.0), "400.0");
-    }
-}
