@@ -57,6 +57,18 @@ pub(super) fn tail_log_growth<F: VectorField<N>, const N: usize>(
     let unit: [[f64; N]; N] = core::array::from_fn(|j| core::array::from_fn(|i| f64::from(i == j)));
     let (mut f, mut columns) = ([0.0; N], [[0.0; N]; N]);
     field.eval::<N>(t, x, &unit, &mut f, &mut columns);
+    log_growth(&columns, w, h, steps)
+}
+
+/// The field-independent part of [`tail_log_growth`], from the columns of P J: compiled once
+/// per state size rather than once per field.
+#[inline(never)]
+fn log_growth<const N: usize>(
+    columns: &[[f64; N]; N],
+    w: &[f64; N],
+    h: f64,
+    steps: u64,
+) -> Option<f64> {
     let a = SMatrix::<f64, N, N>::from_fn(|i, j| h * columns[j][i]);
     let id = SMatrix::<f64, N, N>::identity();
     // S = I + A (I + A/2 (I + A/3 (I + A/4))).
