@@ -70,7 +70,7 @@ step "Slurm, MUNGE, Chromium, ChromeDriver, aarch64 and Cortex-M packages (in th
     >target/slurm-install.log 2>&1 &
 slurm_install_pid=$!
 
-# The book (mdBook, installed pinned into target/tools the first time, ~2 min 40 s of one core)
+# The book (mdBook, installed pinned into target/tools the first time, ~90 s of one core)
 # and its links: it needs nothing of the Rust build, so it starts first, beside the builds.
 step "docs: the book builds and every link resolves (in the background)"
 ( timed docs bash .ci/docs-test.sh >target/docs-test.log 2>&1 ) &
