@@ -98,23 +98,17 @@ impl<const N: usize, const K: usize> VarState<N, K> {
 
     /// Which part is non-finite, if any (NaN or ±∞ anywhere).
     ///
-    /// Multiplying by zero maps finite values to 0 and non-finite ones to NaN, so sums answer
-    /// without a branch per component; the tangents are summed into `N` independent lanes so
-    /// the check vectorises instead of waiting on one long chain of additions.
+    /// A boolean AND of `is_finite` per part, as in [`Self::add_sum_checked`]: the compiler may
+    /// reorder it, so it vectorises (a floating-point sum of `v · 0` it may not, and kept scalar).
+    /// Dormand–Prince asks this of every step.
     #[inline]
     pub(crate) fn non_finite_part(&self) -> Option<super::BlowUpPart> {
         use super::BlowUpPart;
-        let lanes_finite = |lanes: &[f64; N]| lanes.iter().sum::<f64>().is_finite();
-        if !lanes_finite(&self.x.map(|v| v * 0.0)) {
+        let all_finite = |values: &[f64]| values.iter().fold(true, |ok, v| ok & v.is_finite());
+        if !all_finite(&self.x) {
             return Some(BlowUpPart::State);
         }
-        let mut lanes = [0.0; N];
-        for r in &self.w {
-            for (l, v) in lanes.iter_mut().zip(r) {
-                *l += v * 0.0;
-            }
-        }
-        if !lanes_finite(&lanes) {
+        if !all_finite(self.w.as_flattened()) {
             return Some(BlowUpPart::Tangent);
         }
         if !self.trace_integral.is_finite() {
