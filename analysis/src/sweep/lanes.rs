@@ -74,7 +74,7 @@ trait LoopGroup<'a, M, const NX: usize, const NU: usize, const NA: usize, const 
     /// Lane `lane` runs `lp` from now on.
     fn set(&mut self, lane: usize, lp: PidLoop<'a, M, NX, NU, NA>);
     /// The stage derivatives of every lane (`t[l]`, point `l` of `y` → point `l` of `dy`).
-    fn eval(&self, t: &[f64; L], y: &LaneStates<NA, L>, dy: &mut LaneStates<NA, L>);
+    fn eval(&mut self, t: &[f64; L], y: &LaneStates<NA, L>, dy: &mut LaneStates<NA, L>);
 }
 
 impl<'a, M, const NX: usize, const NU: usize, const NA: usize> LoopGroup<'a, M, NX, NU, NA, LANES>
@@ -87,7 +87,12 @@ where
     }
 
     #[inline(always)]
-    fn eval(&self, t: &[f64; LANES], y: &LaneStates<NA, LANES>, dy: &mut LaneStates<NA, LANES>) {
+    fn eval(
+        &mut self,
+        t: &[f64; LANES],
+        y: &LaneStates<NA, LANES>,
+        dy: &mut LaneStates<NA, LANES>,
+    ) {
         LoopLanes::eval(self, t, y, dy);
     }
 }
@@ -105,7 +110,7 @@ where
     }
 
     #[inline(always)]
-    fn eval(&self, t: &[f64; 1], y: &LaneStates<NA, 1>, dy: &mut LaneStates<NA, 1>) {
+    fn eval(&mut self, t: &[f64; 1], y: &LaneStates<NA, 1>, dy: &mut LaneStates<NA, 1>) {
         let mut d = VarState::ZERO;
         eval_stage(&self.0, t[0], &y.point(0), false, &mut d);
         dy.set_point(0, &d);
@@ -113,10 +118,10 @@ where
 }
 
 /// The stage derivatives of the lanes' loops, each lane's tangent projected onto its point's
-/// kept coordinates (`keep[i][l]`; an idle lane keeps all).
+/// kept coordinates (`keep[i][l]`: all ones to keep, zero to drop; an idle lane keeps all).
 struct LaneStages<'g, 'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize> {
-    group: &'g G,
-    keep: &'g [[bool; L]; NA],
+    group: &'g mut G,
+    keep: &'g [[u64; L]; NA],
     loops: PhantomData<PidLoop<'a, M, NX, NU, NA>>,
 }
 
@@ -129,19 +134,22 @@ where
     #[inline(always)]
     fn eval(&mut self, t: &[f64; L], y: &LaneStates<NA, L>, dy: &mut LaneStates<NA, L>) {
         self.group.eval(t, y, dy);
-        // `project` lane by lane: a dropped coordinate becomes +0.
+        // `project` lane by lane: a dropped coordinate becomes +0 (its bits ANDed with zero),
+        // a kept one is unchanged (with all ones), one vector AND per row.
         for (w, keep) in dy.w.iter_mut().zip(self.keep) {
             let w = one_row(w);
             let mut row = *w;
             for l in 0..L {
-                if !keep[l] {
-                    row[l] = 0.0;
-                }
+                row[l] = f64::from_bits(row[l].to_bits() & keep[l]);
             }
             *w = row;
         }
     }
 }
+
+/// The projection's masks of a kept and of a dropped coordinate ([`LaneStages`]).
+const KEEP: u64 = u64::MAX;
+const DROP: u64 = 0;
 
 /// How a point's run ended: its status, λ1 and when it came to rest.
 struct End {
@@ -416,7 +424,7 @@ where
     // What an idle lane is reset to after every step: the start of the last point it ran.
     let mut parked = [VarState::<NA, 1>::ZERO; L];
     // Each lane's projection (an idle lane keeps every coordinate), time and step size.
-    let mut keep = [[true; L]; NA];
+    let mut keep = [[KEEP; L]; NA];
     let (mut t, mut h) = ([0.0; L], [s.h; L]);
     let mut scratch = LaneRk4Scratch::<NA, L>::ZERO;
     let mut next = 0;
@@ -432,7 +440,7 @@ where
                         y.set_point(l, &run.start);
                         parked[l] = run.start;
                         for (row, k) in keep.iter_mut().zip(run.keep) {
-                            row[l] = k;
+                            row[l] = if k { KEEP } else { DROP };
                         }
                         (t[l], h[l]) = (run.t, run.h);
                         runs[l] = Some(run);
@@ -445,7 +453,7 @@ where
             break;
         }
         let mut stages = LaneStages {
-            group: &group,
+            group: &mut group,
             keep: &keep,
             loops: PhantomData,
         };
@@ -461,7 +469,7 @@ where
                 runs[l] = None;
                 y.set_point(l, &parked[l]);
                 for row in &mut keep {
-                    row[l] = true;
+                    row[l] = KEEP;
                 }
                 (t[l], h[l]) = (0.0, s.h);
             } else {

@@ -17,6 +17,9 @@ pub struct LoopLanes<'a, M, const NX: usize, const NU: usize, const NA: usize> {
     loops: [PidLoop<'a, M, NX, NU, NA>; LANES],
     /// The laws as lane arrays, when every loop is a plain PD law of the same plant.
     pd: Option<PdLanes<NU>>,
+    /// ∂f/∂u of the lanes, which the kernel writes whole at every evaluation: kept here so
+    /// that no evaluation spends ~70 instructions zeroing it first.
+    b: [[Lanes; NU]; NX],
 }
 
 /// A plain PD law (no controller state, no outer loop) at eight loops of one plant:
@@ -30,6 +33,58 @@ struct PdLanes<const NU: usize> {
     force_max: Lanes,
     force_dir: [f64; NU],
     yaw_dir: [f64; NU],
+    setpoint: SetpointLanes,
+}
+
+/// The eight loops' setpoints as lane arrays, all of one kind: Φ_ref and dΦ_ref/dΦ are then
+/// whole-lane operations, which lets the law around them vectorise too (one setpoint per lane
+/// read through its enum made the whole law scalar, the largest block of the maps' driver).
+#[derive(Clone, Copy)]
+enum SetpointLanes {
+    /// Φ_ref = value, dΦ_ref/dΦ = 0 ([`Setpoint::Zero`] is the value 0).
+    Fixed { value: Lanes },
+    /// Φ_ref = A·sin Φ, dΦ_ref/dΦ = A·cos Φ.
+    Sine { amplitude: Lanes },
+}
+
+impl SetpointLanes {
+    /// The lane arrays of `setpoints`, if they are all fixed or all sines.
+    fn new(setpoints: [Setpoint; LANES]) -> Option<Self> {
+        let fixed = |s: &Setpoint| match *s {
+            Setpoint::Zero => Some(0.0),
+            Setpoint::Constant { value } => Some(value),
+            Setpoint::Sine { .. } => None,
+        };
+        let sine = |s: &Setpoint| match *s {
+            Setpoint::Sine { amplitude } => Some(amplitude),
+            _ => None,
+        };
+        let all = |f: &dyn Fn(&Setpoint) -> Option<f64>| {
+            let values = setpoints.map(|s| f(&s));
+            values
+                .iter()
+                .all(Option::is_some)
+                .then(|| values.map(|v| v.unwrap_or(0.0)))
+        };
+        (all(&fixed).map(|value| Self::Fixed { value }))
+            .or_else(|| all(&sine).map(|amplitude| Self::Sine { amplitude }))
+    }
+
+    /// Φ_ref and dΦ_ref/dΦ of every lane at its Φ: the bits of [`Setpoint::eval`].
+    #[inline(always)]
+    fn eval(&self, phi: &Lanes) -> (Lanes, Lanes) {
+        match self {
+            Self::Fixed { value } => (*value, [0.0; LANES]),
+            Self::Sine { amplitude } => {
+                let (s, c) = twv_kernels::lanes::sin_cos(*phi);
+                let mut out = ([0.0; LANES], [0.0; LANES]);
+                for l in 0..LANES {
+                    (out.0[l], out.1[l]) = (amplitude[l] * s[l], amplitude[l] * c[l]);
+                }
+                out
+            }
+        }
+    }
 }
 
 impl<'a, M, const NX: usize, const NU: usize, const NA: usize> LoopLanes<'a, M, NX, NU, NA>
@@ -39,7 +94,8 @@ where
     /// The loops `loops`, all of the same model.
     pub fn new(loops: [PidLoop<'a, M, NX, NU, NA>; LANES]) -> Self {
         let pd = Self::pd_lanes(&loops);
-        Self { loops, pd }
+        let b = [[[0.0; LANES]; NU]; NX];
+        Self { loops, pd, b }
     }
 
     /// Lane `lane` runs `lp` from now on (a loop of the same model).
@@ -48,7 +104,8 @@ where
         self.pd = Self::pd_lanes(&self.loops);
     }
 
-    /// The lane-array PD law of `loops`, if every one is a plain PD law of the same plant.
+    /// The lane-array PD law of `loops`, if every one is a plain PD law of the same plant
+    /// and their setpoints are all fixed or all sines.
     fn pd_lanes(loops: &[PidLoop<'a, M, NX, NU, NA>; LANES]) -> Option<PdLanes<NU>> {
         debug_assert!(loops.iter().all(|l| core::ptr::eq(l.model, loops[0].model)));
         let plain = |l: &PidLoop<'a, M, NX, NU, NA>| {
@@ -58,6 +115,7 @@ where
                 && s.yaw.is_none()
                 && l.plant == loops[0].plant
         };
+        let setpoint = SetpointLanes::new(loops.map(|l| l.settings.pitch.setpoint))?;
         loops.iter().all(plain).then(|| {
             let plant = &loops[0].plant;
             let gains = loops.map(|l| l.settings.pitch.gains);
@@ -69,6 +127,7 @@ where
                 force_max: loops.map(|l| l.settings.pitch.saturation.unwrap_or(f64::INFINITY)),
                 force_dir: plant.inputs.force,
                 yaw_dir: plant.inputs.yaw.unwrap_or([0.0; NU]),
+                setpoint,
             }
         })
     }
@@ -79,17 +138,17 @@ where
     /// the closed loop's derivatives are whole-lane operations.
     #[inline(always)]
     pub fn eval(
-        &self,
+        &mut self,
         t: &[f64; LANES],
         y: &LaneStates<NA, LANES>,
         dy: &mut LaneStates<NA, LANES>,
     ) {
-        let setpoints = self.setpoints(&y.x[self.loops[0].plant.measured.phi]);
         let mut u = [[0.0; LANES]; NU];
         let mut du = [[0.0; LANES]; NU];
         match &self.pd {
-            Some(pd) => pd.eval(y, &setpoints, &mut u, &mut du),
+            Some(pd) => pd.eval(y, &mut u, &mut du),
             None => {
+                let setpoints = self.setpoints(&y.x[self.loops[0].plant.measured.phi]);
                 for (l, lp) in self.loops.iter().enumerate() {
                     let point = y.point(l);
                     // Reduced at once to what is needed later: copying eight whole laws (their
@@ -113,13 +172,13 @@ where
             (&mut dy.x[..NX]).try_into().expect("NX ≤ NA"),
             (&mut dy.w[..NX]).try_into().expect("NX ≤ NA"),
         );
-        let mut b = [[[0.0; LANES]; NU]; NX];
+        let b = &mut self.b;
         self.loops[0]
             .model
-            .f_jw_jac_u_lane_arrays(x, &u, w, fx, jwx, &mut b);
+            .f_jw_jac_u_lane_arrays(x, &u, w, fx, jwx, b);
         // J·w of the loop: the model's plus ∂f/∂u · ∂u/∂x·w, the dot product as `assemble`
         // forms it (every term added to `-0.0`, the start of `f64`'s `Sum`).
-        for (out, b) in jwx.iter_mut().zip(&b) {
+        for (out, b) in jwx.iter_mut().zip(&*b) {
             let out = one_row(out);
             let mut row = *out;
             for l in 0..LANES {
@@ -167,16 +226,16 @@ impl<const NU: usize> PdLanes<NU> {
     fn eval<const NA: usize>(
         &self,
         y: &LaneStates<NA, LANES>,
-        setpoints: &[(f64, f64); LANES],
         u: &mut [Lanes; NU],
         du: &mut [Lanes; NU],
     ) {
         let (phi, rate) = (&y.x[self.phi], &y.x[self.rate]);
+        let (phi_ref, dsp) = self.setpoint.eval(phi);
         let mut force = [0.0; LANES];
         let mut saturated = [false; LANES];
         let mut de_phi = [0.0; LANES];
         for l in 0..LANES {
-            let (phi_ref, dsp) = setpoints[l];
+            let (phi_ref, dsp) = (phi_ref[l], dsp[l]);
             let e = phi[l] - phi_ref;
             // unit(Φ) − ∂Φ_ref/∂x at Φ's entry, as the one-loop path forms it (elsewhere
             // 0 + (−1)·0 = +0). `-dsp` would differ from `-1.0 * dsp` in the sign of a NaN.
