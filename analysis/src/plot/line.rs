@@ -5,7 +5,10 @@ use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-use super::{bounds, font, tick, Area, DrawResult, COLORS, LABEL_PX, TICK_PX, TITLE_PX};
+use super::{
+    bounds, decade_label, decades, font, tick, Area, DrawResult, COLORS, LABEL_PX, TICK_PX,
+    TITLE_PX,
+};
 
 /// One named curve.
 #[derive(Debug, Clone, PartialEq)]
@@ -106,10 +109,13 @@ impl LineChart {
             let lo = xs.clone().fold(f64::INFINITY, f64::min);
             let hi = xs.fold(0.0, f64::max);
             let (lo, hi) = if lo.is_finite() && hi > lo {
-                (lo, hi)
+                decades(lo, hi)
             } else {
                 (1.0, 10.0)
             };
+            // A hair beyond the end decades: plotters finds its key points from ln(lo)/ln(10),
+            // which for lo = 0.1 rounds to just above −1 and skips the first decade's label.
+            let (lo, hi) = (lo * (1.0 - 1e-9), hi * (1.0 + 1e-9));
             let ctx = builder.build_cartesian_2d((lo..hi).log_scale(), y0..y1)?;
             self.draw_series(ctx, &kept, k)?;
         } else {
@@ -153,8 +159,10 @@ impl LineChart {
         let width = ctx.plotting_area().dim_in_pixel().0 / k.max(1);
         let x_labels = (width / 64).clamp(3, 10) as usize;
         let mut mesh = ctx.configure_mesh();
-        if !self.log_x {
-            // A logarithmic axis keeps its own labels (decades).
+        if self.log_x {
+            // A logarithmic axis is labelled at its decades (plotters' key points).
+            mesh.x_label_formatter(&decade_label);
+        } else {
             mesh.x_label_formatter(&tick).x_labels(x_labels);
         }
         mesh.y_label_formatter(&tick)

@@ -64,6 +64,44 @@ pub fn tick(value: &f64) -> String {
     }
 }
 
+/// The whole decades around `lo..hi` (both > 0), the range of a logarithmic axis: its labels are
+/// the decades, so a range that starts or ends between two would leave its ends unlabelled.
+///
+/// ```
+/// use twv_analysis::plot::decades;
+/// assert_eq!(decades(0.125, 30.0), (0.1, 100.0));
+/// assert_eq!(decades(0.1, 10.0), (0.1, 10.0));
+/// assert_eq!(decades(2.0, 3.0), (1.0, 10.0));
+/// ```
+pub fn decades(lo: f64, hi: f64) -> (f64, f64) {
+    let decade = |e: f64| power_of_ten(e as i32);
+    (decade(lo.log10().floor()), decade(hi.log10().ceil()))
+}
+
+/// A decade's label as a person writes it ("0.01", "1", "1000", "1e6"), whatever rounding its
+/// key point carries.
+///
+/// ```
+/// use twv_analysis::plot::decade_label;
+/// assert_eq!(decade_label(&0.1), "0.1");
+/// assert_eq!(decade_label(&(0.1 * 10.0 * 10.0)), "10");
+/// assert_eq!(decade_label(&1e-5), "1e-5");
+/// assert_eq!(decade_label(&1e6), "1e6");
+/// ```
+pub fn decade_label(value: &f64) -> String {
+    let e = value.log10().round() as i32;
+    if (-3..=4).contains(&e) {
+        power_of_ten(e).to_string()
+    } else {
+        format!("1e{e}")
+    }
+}
+
+/// 10^e, correctly rounded (the parse of its decimal text).
+fn power_of_ten(e: i32) -> f64 {
+    format!("1e{e}").parse().unwrap_or(f64::NAN)
+}
+
 /// A drawing area of any backend.
 pub(crate) type Area<'a, DB> = DrawingArea<DB, Shift>;
 
