@@ -104,13 +104,16 @@ where
         self.pd = Self::pd_lanes(&self.loops);
     }
 
-    /// The lane-array PD law of `loops`, if every one is a plain PD law of the same plant
-    /// and their setpoints are all fixed or all sines.
+    /// The lane-array PD law of `loops`, if every one is a plain PD law of the same plant (Φ and
+    /// Φ̇ two states) with a finite Kp (as validated settings have) and their setpoints are all
+    /// fixed or all sines.
     fn pd_lanes(loops: &[PidLoop<'a, M, NX, NU, NA>; LANES]) -> Option<PdLanes<NU>> {
         debug_assert!(loops.iter().all(|l| core::ptr::eq(l.model, loops[0].model)));
         let plain = |l: &PidLoop<'a, M, NX, NU, NA>| {
             let s = l.settings;
             l.layout.states().is_empty()
+                && s.pitch.gains.kp.is_finite()
+                && l.plant.measured.phi != l.plant.measured.w_y
                 && s.velocity.is_none()
                 && s.yaw.is_none()
                 && l.plant == loops[0].plant
@@ -252,16 +255,31 @@ impl<const NU: usize> PdLanes<NU> {
                 (cmd, false)
             };
         }
-        let (mut d_force_w, mut d_yaw_w) = ([-0.0; LANES], [-0.0; LANES]);
+        // ∂F/∂x·w and ∂(yaw)/∂x·w. The gradient of F (the command's, zero while saturated) is
+        // +0 at every entry but Φ and Φ̇ (0 + Kp·0 with a finite Kp, see `pd_lanes`), the yaw's
+        // +0 at all: those terms are +0·w, the same for both sums, added first. That gives the
+        // bits of the dot products in index order: a signed zero term changes only a zero sum's
+        // sign, in any order (a sum of zeros is −0 only if every term is), and a non-finite w
+        // makes both NaN either way.
+        let mut zeros = [-0.0; LANES];
         for (j, w) in y.w.iter().enumerate() {
-            let w = *one_row(w);
+            if j != self.phi && j != self.rate {
+                let w = *one_row(w);
+                for l in 0..LANES {
+                    zeros[l] += 0.0 * w[l];
+                }
+            }
+        }
+        let (mut d_force_w, mut d_yaw_w) = (zeros, zeros);
+        let (first, second) = (self.phi.min(self.rate), self.phi.max(self.rate));
+        for j in [first, second] {
+            let w = *one_row(&y.w[j]);
             for l in 0..LANES {
                 let de = if j == self.phi { de_phi[l] } else { 0.0 };
                 let mut d_cmd = 0.0 + self.kp[l] * de;
                 if j == self.rate {
                     d_cmd += self.kd[l];
                 }
-                // The gradient of F: the command's, zero while saturated.
                 let d_force = if saturated[l] { 0.0 } else { d_cmd };
                 d_force_w[l] += d_force * w[l];
                 d_yaw_w[l] += 0.0 * w[l];
