@@ -21,8 +21,8 @@ use crate::model::{
 use crate::output::write_atomic;
 use crate::progress::Progress;
 use crate::sweep::{
-    max_lyapunov_lanes, metric, Axis, Grid, Metric, MetricSettings, PointResult, Shard, ShardFile,
-    Status, SweepConfig, SweepError, TILT_AXIS,
+    max_lyapunov_lanes, metric, Axis, DriverChoice, Grid, Metric, MetricSettings, PointResult,
+    Shard, ShardFile, Status, SweepConfig, SweepError, TILT_AXIS,
 };
 
 /// The most points one sweep may have (each is a 10 s closed-loop run; the shard files hold
@@ -264,6 +264,8 @@ struct Chunk<'a> {
     config: &'a SweepConfig,
     base: &'a ControllerSettings,
     indices: Range<usize>,
+    /// The maps' driver build for the whole sweep.
+    choice: &'a DriverChoice,
 }
 
 impl ControlTask for Chunk<'_> {
@@ -302,7 +304,7 @@ impl ControlTask for Chunk<'_> {
             .collect::<Result<Vec<_>, _>>()?;
         Ok(match self.config.metric {
             // Eight points at a time through the lanes kernel (same bits as one by one).
-            Metric::MaxLyapunov => max_lyapunov_lanes(&loops, &x0, s, &indices),
+            Metric::MaxLyapunov => max_lyapunov_lanes(&loops, &x0, s, &indices, self.choice),
             Metric::SettlingTime => (loops.iter().zip(indices))
                 .map(|(field, index)| metric::settling_time(field, &x0, s, index))
                 .collect(),
@@ -407,6 +409,7 @@ fn compute_inner(
                 .iter()
                 .flat_map(|r| chunks(grid, r.clone(), size))
                 .collect();
+            let choice = DriverChoice::default();
             let parts: Vec<Option<Vec<PointResult>>> = work
                 .into_par_iter()
                 .map(|(nz, indices)| {
@@ -419,6 +422,7 @@ fn compute_inner(
                         config,
                         base,
                         indices,
+                        choice: &choice,
                     };
                     let p = dispatch_control(at, nz0 + nz, task)?;
                     progress.advance(n);

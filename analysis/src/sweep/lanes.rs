@@ -14,7 +14,9 @@
 //! finite start state (which keeps the lanes kernel on its fast path) and its results ignored.
 
 use core::marker::PhantomData;
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
+use twv_kernels::isa::{Calibration, Isa};
 use twv_kernels::lanes::LANES;
 use twv_model::Model;
 
@@ -31,12 +33,13 @@ use crate::lyapunov::{initial_basis, orthonormalize, InitialBasis, IntervalEnds}
 
 /// λ1 of the closed loops `loops` (the grid points `indices`) from the model state `x0`, in
 /// that order: exactly what [`max_lyapunov`] gives for each, eight at a time (fewer than eight
-/// points run one by one).
+/// points run one by one), with the driver's build that `choice` picks.
 pub fn max_lyapunov_lanes<M, const NX: usize, const NU: usize, const NA: usize>(
     loops: &[PidLoop<'_, M, NX, NU, NA>],
     x0: &[f64; NX],
     s: &MetricSettings,
     indices: &[usize],
+    choice: &DriverChoice,
 ) -> Vec<PointResult>
 where
     M: Model<NX, NU>,
@@ -48,7 +51,37 @@ where
             .collect();
     }
     let first = core::array::from_fn(|l| loops[l]);
-    drive(LoopLanes::new(first), loops, x0, s, indices)
+    drive(LoopLanes::new(first), loops, x0, s, indices, Some(choice))
+}
+
+/// Which build of the maps' driver (per instruction set) runs a sweep's chunks: the fastest
+/// on this CPU, found by timing its first chunks with each ([`Calibration`], as the RK4 steps
+/// choose theirs; "the best instruction set" is not always the fastest). Shared by the threads
+/// that run the chunks; every build gives the same bits, so the choice changes only the speed.
+#[derive(Debug)]
+pub struct DriverChoice(Mutex<Calibration>);
+
+impl Default for DriverChoice {
+    fn default() -> Self {
+        Self(Mutex::new(Calibration::NEW))
+    }
+}
+
+impl DriverChoice {
+    /// The build for the next chunk, and whether to time it.
+    pub fn next(&self) -> (Isa, bool) {
+        self.calibration().next()
+    }
+
+    /// Books a timed chunk of `isa` that took `per_step` seconds per step of its lanes.
+    pub fn record(&self, isa: Isa, per_step: f64) {
+        self.calibration().record(isa, per_step);
+    }
+
+    fn calibration(&self) -> MutexGuard<'_, Calibration> {
+        // A thread that panicked while holding it left plain numbers: still usable.
+        self.0.lock().unwrap_or_else(PoisonError::into_inner)
+    }
 }
 
 /// λ1 of the closed loop's pitch-loop coordinates ([`loop_states`]: the tangent dynamics with
@@ -65,7 +98,14 @@ pub fn max_lyapunov<M, const NX: usize, const NU: usize, const NA: usize>(
 where
     M: Model<NX, NU>,
 {
-    let mut one = drive(One(*field), core::slice::from_ref(field), x0, s, &[index]);
+    let mut one = drive(
+        One(*field),
+        core::slice::from_ref(field),
+        x0,
+        s,
+        &[index],
+        None,
+    );
     one.remove(0)
 }
 
@@ -325,13 +365,15 @@ impl<const NA: usize> Run<NA> {
 
 /// Runs every loop of `loops` through the `L` lanes of `group` (whose lanes may hold any loops
 /// of the same model to begin with), refilling a lane as soon as its point is done; with the
-/// build of [`drive_inline`] for the instruction set the kernels use ([`twv_kernels::isa`]).
+/// build of [`drive_inline`] that `choice` picks, or without one for the instruction set the
+/// kernels use ([`twv_kernels::isa::current`]).
 fn drive<'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize>(
     group: G,
     loops: &[PidLoop<'a, M, NX, NU, NA>],
     x0: &[f64; NX],
     s: &MetricSettings,
     indices: &[usize],
+    choice: Option<&DriverChoice>,
 ) -> Vec<PointResult>
 where
     G: LoopGroup<'a, M, NX, NU, NA, L>,
@@ -341,20 +383,24 @@ where
     // (a constant per model type, `Model::COMPILED_IN`).
     #[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
     if M::COMPILED_IN {
-        match twv_kernels::isa::current() {
-            // SAFETY: `current` returns AVX-512 only when the CPU and the OS support AVX-512F
-            // and AVX-512VL.
-            twv_kernels::isa::Isa::Avx512 => {
-                return unsafe { drive_avx512(group, loops, x0, s, indices) }
-            }
-            // SAFETY: `current` returns AVX2 only when the CPU and the OS support it.
-            twv_kernels::isa::Isa::Avx2 => {
-                return unsafe { drive_avx2(group, loops, x0, s, indices) }
-            }
-            twv_kernels::isa::Isa::Neon | twv_kernels::isa::Isa::Baseline => {}
+        let (isa, timed) = choice.map_or((twv_kernels::isa::current(), false), DriverChoice::next);
+        let start = timed.then(std::time::Instant::now);
+        let (results, steps) = match isa {
+            // SAFETY: `current` and `Calibration::next` give AVX-512 only when the CPU and the
+            // OS support AVX-512F and AVX-512VL.
+            Isa::Avx512 => unsafe { drive_avx512(group, loops, x0, s, indices) },
+            // SAFETY: they give AVX2 only when the CPU and the OS support it.
+            Isa::Avx2 => unsafe { drive_avx2(group, loops, x0, s, indices) },
+            Isa::Neon | Isa::Baseline => drive_inline(group, loops, x0, s, indices),
+        };
+        if let (Some(start), Some(choice)) = (start, choice) {
+            choice.record(isa, start.elapsed().as_secs_f64() / steps.max(1) as f64);
         }
+        return results;
     }
-    drive_inline(group, loops, x0, s, indices)
+    #[cfg(not(all(target_arch = "x86_64", not(debug_assertions))))]
+    let _ = choice;
+    drive_inline(group, loops, x0, s, indices).0
 }
 
 /// A build of [`drive_inline`] for the instruction sets `$features`, which the CPU must have.
@@ -372,7 +418,7 @@ macro_rules! drive_build {
             x0: &[f64; NX],
             s: &MetricSettings,
             indices: &[usize],
-        ) -> Vec<PointResult>
+        ) -> (Vec<PointResult>, u64)
         where
             G: LoopGroup<'a, M, NX, NU, NA, L>,
             M: Model<NX, NU>,
@@ -397,7 +443,8 @@ drive_build!(
     "avx2"
 );
 
-/// [`drive`] written out, every step inlined: the body of its builds.
+/// [`drive`] written out, every step inlined: the body of its builds. Returns the results and
+/// the number of steps the lanes took together.
 #[inline(always)]
 fn drive_inline<'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize>(
     mut group: G,
@@ -405,7 +452,7 @@ fn drive_inline<'a, G, M, const NX: usize, const NU: usize, const NA: usize, con
     x0: &[f64; NX],
     s: &MetricSettings,
     indices: &[usize],
-) -> Vec<PointResult>
+) -> (Vec<PointResult>, u64)
 where
     G: LoopGroup<'a, M, NX, NU, NA, L>,
     M: Model<NX, NU>,
@@ -428,6 +475,7 @@ where
     let (mut t, mut h) = ([0.0; L], [s.h; L]);
     let mut scratch = LaneRk4Scratch::<NA, L>::ZERO;
     let mut next = 0;
+    let mut steps = 0;
     loop {
         // Idle lanes take the next points; a point that ends before its first step is booked.
         for l in 0..L {
@@ -458,6 +506,7 @@ where
             loops: PhantomData,
         };
         let finite = rk4_step_lanes(&t, &h, &mut y, &mut scratch, &mut stages);
+        steps += 1;
         for l in 0..L {
             let Some(run) = &mut runs[l] else {
                 y.set_point(l, &parked[l]);
@@ -477,5 +526,5 @@ where
             }
         }
     }
-    results.into_iter().flatten().collect()
+    (results.into_iter().flatten().collect(), steps)
 }

@@ -31,7 +31,7 @@ pub use error::{ranges, SweepError};
 pub use fall::FallStop;
 pub use file::{shard_files_named, shard_paths, ShardFile, SHARD_FORMAT};
 pub use grid::{Axis, Grid, ParamAxis, TILT_AXIS};
-pub use lanes::max_lyapunov_lanes;
+pub use lanes::{max_lyapunov_lanes, DriverChoice};
 pub use merge::{collect, merge, Map, MAP_FORMAT};
 pub use point::{PointResult, Status};
 pub use settle::SETTLED_TAIL_TOLERANCE;

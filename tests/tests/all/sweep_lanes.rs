@@ -11,7 +11,9 @@ use twv_analysis::control::{
     YawLoop,
 };
 use twv_analysis::linear::PidGains;
-use twv_analysis::sweep::{max_lyapunov_lanes, metric, MetricSettings, PointResult, Status};
+use twv_analysis::sweep::{
+    max_lyapunov_lanes, metric, DriverChoice, MetricSettings, PointResult, Status,
+};
 use twv_generated::Vehicle8;
 use twv_kernels::lanes::LANES;
 use twv_model::Model;
@@ -100,7 +102,7 @@ fn compare<const NA: usize>(base: &ControllerSettings, ki: f64, what: &str) -> V
     // Each build this CPU can run (a lower one is what `force` falls back to otherwise).
     for isa in [Isa::Avx512, Isa::Avx2, Isa::Neon, Isa::Baseline] {
         let used = force(isa);
-        let lanes = max_lyapunov_lanes(&loops, &x0, &s, &indices);
+        let lanes = max_lyapunov_lanes(&loops, &x0, &s, &indices, &DriverChoice::default());
         assert_eq!(lanes.len(), one.len(), "{what}: one result per point");
         for (a, b) in lanes.iter().zip(&one) {
             same_point(a, b, &format!("{what} ({} kernel)", used.name()));
@@ -293,7 +295,7 @@ fn the_settled_tail_moves_lambda1_by_at_most_its_stated_tolerance() {
             settle_distance,
             ..MetricSettings::default()
         };
-        max_lyapunov_lanes(&loops, &x0, &s, &indices)
+        max_lyapunov_lanes(&loops, &x0, &s, &indices, &DriverChoice::default())
     };
     let full = run(None);
     let largest_change = |with: &[PointResult]| {
@@ -333,4 +335,41 @@ fn the_settled_tail_moves_lambda1_by_at_most_its_stated_tolerance() {
         loose > SETTLED_TAIL_TOLERANCE,
         "a loose rest criterion should break the tolerance (moved {loose:e} /s)"
     );
+}
+
+/// A sweep's driver build is the one its first chunks ran fastest, whichever that is: the
+/// builds take turns while timed, then the smallest time per step wins (on a CPU with one
+/// build, the baseline, there is nothing to choose).
+#[test]
+fn a_sweep_runs_the_driver_build_its_timed_chunks_found_fastest() {
+    use twv_kernels::isa::{current, Isa};
+    let chosen = |baseline_time: f64| {
+        let choice = DriverChoice::default();
+        let mut timed = Vec::new();
+        loop {
+            let (isa, to_time) = choice.next();
+            if !to_time {
+                break (isa, timed);
+            }
+            timed.push(isa);
+            let per_step = if isa == Isa::Baseline {
+                baseline_time
+            } else {
+                1.0
+            };
+            choice.record(isa, per_step);
+        }
+    };
+    // The driver has builds for x86-64's AVX2 and AVX-512; elsewhere the baseline only.
+    let best = match current() {
+        Isa::Avx512 | Isa::Avx2 => current(),
+        Isa::Neon | Isa::Baseline => Isa::Baseline,
+    };
+    let (slow_baseline, timed) = chosen(2.0);
+    assert_eq!(slow_baseline, best, "timed: {timed:?}");
+    let (fast_baseline, timed) = chosen(0.5);
+    assert_eq!(fast_baseline, Isa::Baseline, "timed: {timed:?}");
+    if best != Isa::Baseline {
+        assert!(timed.contains(&best) && timed.contains(&Isa::Baseline));
+    }
 }
