@@ -409,7 +409,7 @@ fn compute_inner(
                 .iter()
                 .flat_map(|r| chunks(grid, r.clone(), size))
                 .collect();
-            let choice = DriverChoice::default();
+            let choice = DriverChoice::for_chunks(work.len());
             let parts: Vec<Option<Vec<PointResult>>> = work
                 .into_par_iter()
                 .map(|(nz, indices)| {

@@ -59,18 +59,45 @@ where
 /// choose theirs; "the best instruction set" is not always the fastest). Shared by the threads
 /// that run the chunks; every build gives the same bits, so the choice changes only the speed.
 #[derive(Debug)]
-pub struct DriverChoice(Mutex<Calibration>);
+pub struct DriverChoice {
+    calibration: Mutex<Calibration>,
+    /// Whether to time at all: a sweep of a few chunks would run a third of them on a slower
+    /// build and learn nothing it could use.
+    timed: bool,
+}
 
 impl Default for DriverChoice {
+    /// The build of the instruction set the kernels use ([`twv_kernels::isa::current`]), untimed.
     fn default() -> Self {
-        Self(Mutex::new(Calibration::NEW))
+        Self::with_timing(false)
     }
 }
 
 impl DriverChoice {
+    /// A sweep's first chunks are timed when it has at least this many: the ≤ 9 timed ones
+    /// (three rounds of up to three builds) are then at most a tenth of it.
+    pub const MIN_TIMED_CHUNKS: usize = 90;
+
+    /// The choice for a sweep of `chunks` chunks: timed when there are enough of them.
+    pub fn for_chunks(chunks: usize) -> Self {
+        Self::with_timing(chunks >= Self::MIN_TIMED_CHUNKS)
+    }
+
+    /// The choice by timing (`true`) or the kernels' instruction set (`false`).
+    pub fn with_timing(timed: bool) -> Self {
+        Self {
+            calibration: Mutex::new(Calibration::NEW),
+            timed,
+        }
+    }
+
     /// The build for the next chunk, and whether to time it.
     pub fn next(&self) -> (Isa, bool) {
-        self.calibration().next()
+        if self.timed {
+            self.calibration().next()
+        } else {
+            (twv_kernels::isa::current(), false)
+        }
     }
 
     /// Books a timed chunk of `isa` that took `per_step` seconds per step of its lanes.
@@ -80,7 +107,9 @@ impl DriverChoice {
 
     fn calibration(&self) -> MutexGuard<'_, Calibration> {
         // A thread that panicked while holding it left plain numbers: still usable.
-        self.0.lock().unwrap_or_else(PoisonError::into_inner)
+        self.calibration
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
     }
 }
 

@@ -339,12 +339,12 @@ fn the_settled_tail_moves_lambda1_by_at_most_its_stated_tolerance() {
 
 /// A sweep's driver build is the one its first chunks ran fastest, whichever that is: the
 /// builds take turns while timed, then the smallest time per step wins (on a CPU with one
-/// build, the baseline, there is nothing to choose).
+/// build, the baseline, there is nothing to choose); a sweep of few chunks is not timed.
 #[test]
 fn a_sweep_runs_the_driver_build_its_timed_chunks_found_fastest() {
     use twv_kernels::isa::{current, Isa};
     let chosen = |baseline_time: f64| {
-        let choice = DriverChoice::default();
+        let choice = DriverChoice::with_timing(true);
         let mut timed = Vec::new();
         loop {
             let (isa, to_time) = choice.next();
@@ -372,4 +372,13 @@ fn a_sweep_runs_the_driver_build_its_timed_chunks_found_fastest() {
     if best != Isa::Baseline {
         assert!(timed.contains(&best) && timed.contains(&Isa::Baseline));
     }
+    // A sweep of few chunks is not timed: it runs the kernels' instruction set throughout.
+    let few = DriverChoice::for_chunks(DriverChoice::MIN_TIMED_CHUNKS - 1);
+    assert_eq!(few.next(), (current(), false));
+    assert!(
+        DriverChoice::for_chunks(DriverChoice::MIN_TIMED_CHUNKS)
+            .next()
+            .1
+            || best == Isa::Baseline
+    );
 }
