@@ -11,8 +11,10 @@
 //!   `bake` the struct holds its parameters at run time.
 //! - Relative paths are relative to the `CARGO_MANIFEST_DIR` of the crate calling the macro,
 //!   or, when the file is not there, to the nearest parent directory that has it (so paths from
-//!   the workspace root work in every member crate); absolute paths are used as they are. The expansion refers to `::twv_model` (the traits)
-//!   and `::twv_kernels` (sincos, ISA choice, lanes), so the calling crate depends on both.
+//!   the workspace root work in every member crate), or else to this macro crate's directory
+//!   and its parents; absolute paths are used as they are. The expansion refers to
+//!   `::twv_model` (the traits) and `::twv_kernels` (sincos, ISA choice, lanes), so the calling
+//!   crate depends on both.
 //! - The expansion `include_bytes!`es every file it read, so editing the IR or the baked TOML
 //!   rebuilds the calling crate with the new code.
 //! - Any problem with a file becomes a `compile_error!` naming the file (as written in the call)
@@ -89,7 +91,9 @@ fn pair(input: ParseStream) -> syn::Result<(Ident, Value)> {
 /// Resolve a path argument: absolute paths as they are; a relative path against the calling
 /// crate's `CARGO_MANIFEST_DIR`, or else against the nearest parent directory where it exists
 /// (so a workspace-root path such as `generated/ir/vehicle8.json` works from every member, and
-/// from the scratch crates of compile-fail tests under `target/`).
+/// from the scratch crates of compile-fail tests under `target/`), or else against this macro
+/// crate's own directory and its parents (the scratch crates are under a `CARGO_TARGET_DIR`
+/// outside the workspace when a developer sets one).
 fn resolve(lit: &LitStr) -> syn::Result<PathBuf> {
     let path = PathBuf::from(lit.value());
     if path.is_absolute() {
@@ -102,7 +106,8 @@ fn resolve(lit: &LitStr) -> syn::Result<PathBuf> {
         )
     })?;
     let dir = PathBuf::from(dir);
-    dir.ancestors()
+    let own = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    (dir.ancestors().chain(own.ancestors()))
         .map(|base| base.join(&path))
         .find(|candidate| candidate.is_file())
         .ok_or_else(|| {
