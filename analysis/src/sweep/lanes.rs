@@ -51,7 +51,7 @@ where
             .collect();
     }
     let first = core::array::from_fn(|l| loops[l]);
-    drive(LoopLanes::new(first), loops, x0, s, indices, Some(choice))
+    drive(LoopLanes::new(first), loops, x0, s, indices, choice)
 }
 
 /// Which build of the maps' driver (per instruction set) runs a sweep's chunks: the fastest
@@ -127,13 +127,15 @@ pub fn max_lyapunov<M, const NX: usize, const NU: usize, const NA: usize>(
 where
     M: Model<NX, NU>,
 {
+    // One point is not worth timing builds for: the kernels' instruction set.
+    let choice = DriverChoice::default();
     let mut one = drive(
         One(*field),
         core::slice::from_ref(field),
         x0,
         s,
         &[index],
-        None,
+        &choice,
     );
     one.remove(0)
 }
@@ -394,15 +396,14 @@ impl<const NA: usize> Run<NA> {
 
 /// Runs every loop of `loops` through the `L` lanes of `group` (whose lanes may hold any loops
 /// of the same model to begin with), refilling a lane as soon as its point is done; with the
-/// build of [`drive_inline`] that `choice` picks, or without one for the instruction set the
-/// kernels use ([`twv_kernels::isa::current`]).
+/// build of [`drive_inline`] that `choice` picks.
 fn drive<'a, G, M, const NX: usize, const NU: usize, const NA: usize, const L: usize>(
     group: G,
     loops: &[PidLoop<'a, M, NX, NU, NA>],
     x0: &[f64; NX],
     s: &MetricSettings,
     indices: &[usize],
-    choice: Option<&DriverChoice>,
+    choice: &DriverChoice,
 ) -> Vec<PointResult>
 where
     G: LoopGroup<'a, M, NX, NU, NA, L>,
@@ -412,7 +413,7 @@ where
     // (a constant per model type, `Model::COMPILED_IN`).
     #[cfg(all(target_arch = "x86_64", not(debug_assertions)))]
     if M::COMPILED_IN {
-        let (isa, timed) = choice.map_or((twv_kernels::isa::current(), false), DriverChoice::next);
+        let (isa, timed) = choice.next();
         let start = timed.then(std::time::Instant::now);
         let (results, steps) = match isa {
             // SAFETY: `current` and `Calibration::next` give AVX-512 only when the CPU and the
@@ -422,7 +423,7 @@ where
             Isa::Avx2 => unsafe { drive_avx2(group, loops, x0, s, indices) },
             Isa::Neon | Isa::Baseline => drive_inline(group, loops, x0, s, indices),
         };
-        if let (Some(start), Some(choice)) = (start, choice) {
+        if let Some(start) = start {
             choice.record(isa, start.elapsed().as_secs_f64() / steps.max(1) as f64);
         }
         return results;
