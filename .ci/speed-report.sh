@@ -44,8 +44,9 @@ bench() { # NAME [VAR=VALUE...] COMMAND...
 
 bench "kernels against both C peers, each build; the preset against its floor" \
     TWV_BENCH_SAMPLES=31 cargo bench -q -p twv-bench --bench kernels
-bench "the JIT against compiled and interpreted code" \
-    TWV_BENCH_SAMPLES=31 cargo bench -q -p twv-bench --bench jit
+# With the bicycle's CasADi C (the peer of its JIT; ~20 s of gcc the first time).
+bench "the JIT against compiled and interpreted code, the bicycle's against CasADi's C" \
+    TWV_BENCH_SAMPLES=31 cargo bench -q -p twv-bench --features bicycle-peer --bench jit
 bench "the 100 × 100 max-Lyapunov map, each lanes build" \
     TWV_MAP_ROUNDS=2 cargo bench -q -p twv-analysis --bench map
 # The bicycle's steer map from Python and the CLI against python-control and NumPy: the

@@ -35,3 +35,14 @@ def test_export_writes_both_peers_with_their_operation_counts(tmp_path):
     # More outputs, more operations, for both.
     for counts in (own, hand):
         assert 0 < counts["f"] < counts["f_jac_x"] < counts["f_jw8"], counts
+
+
+def test_export_names_jw_by_its_tangents_and_can_leave_out_the_baked_functions(tmp_path):
+    m = numeric("lorenz").model
+    export_c(m, tmp_path, tangents=3, baked=False)
+    counts = json.loads((tmp_path / "lorenz_ops.json").read_text())
+    assert set(counts) == {"f", "f_jac_x", "f_jw3"}
+    header = (tmp_path / "lorenz_casadi.h").read_text()
+    assert "lorenz_f_jw3(" in header and "_baked" not in header
+    export_c(m, tmp_path, tangents=2)
+    assert "lorenz_f_jw2_baked(" in (tmp_path / "lorenz_casadi.h").read_text()

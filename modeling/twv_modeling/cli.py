@@ -90,7 +90,8 @@ def cmd_export_c(args) -> int:
     from .cgen import export_c
 
     model = build(args.model)
-    print(export_c(model, Path(args.out_dir)))
+    out = Path(args.out_dir)
+    print(export_c(model, out, tangents=args.tangents, baked=not args.runtime_only))
     if args.hand:
         from .hand_peer import vehicle8_by_hand
 
@@ -121,6 +122,17 @@ def cmd_bicycles(args) -> int:
     return 0
 
 
+def _positive(text: str) -> int:
+    """An argument that must be a whole number of at least 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number of at least 1")
+    return value
+
+
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="python -m twv_modeling", description=__doc__)
     sub = ap.add_subparsers(dest="command", required=True)
@@ -145,6 +157,12 @@ def parser() -> argparse.ArgumentParser:
     e.add_argument("--out-dir", required=True)
     e.add_argument(
         "--hand", action="store_true", help="also the hand-written peer (vehicle8: `_hand`)"
+    )
+    e.add_argument(
+        "--tangents", type=_positive, default=8, help="tangent vectors of f_jw<K> (default 8)"
+    )
+    e.add_argument(
+        "--runtime-only", action="store_true", help="no *_baked functions (defaults folded in)"
     )
     e.set_defaults(run=cmd_export_c)
     b = sub.add_parser(

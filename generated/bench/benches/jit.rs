@@ -131,6 +131,61 @@ fn rk4<const NX: usize, const NU: usize>(
     (start.elapsed().as_secs_f64(), black_box(x))
 }
 
+/// The bicycle's JIT against CasADi's C of the same IR (gcc -O3), paired, per function.
+#[cfg(feature = "bicycle-peer")]
+fn bicycle_against_c(plan: Plan, jit: &Interpreted<9, 2>, c: &twv_bench::bicycle::BicycleC) {
+    use twv_bench::bicycle::{point, K, NX};
+    let (x, u, w) = point(0);
+    let nnz = jit.jac_x_row().len();
+    // Each side writes its own buffers (the closures hold them mutably).
+    let (mut fa, mut fb) = ([0.0; NX], [0.0; NX]);
+    let (mut ja, mut jb) = (vec![0.0; nnz], vec![0.0; nnz]);
+    let (mut wa, mut wb) = ([[0.0; NX]; K], [[0.0; NX]; K]);
+    println!(
+        "the bicycle (whipple, runtime parameters): its JIT against CasADi's C of the same IR \
+         (gcc -O3), ns per call (median ±half the IQR, paired):"
+    );
+    println!();
+    println!("| function | JIT | CasADi C | JIT / C |");
+    println!("|---|---:|---:|---:|");
+    let row = |what: &str, pair: twv_bench::Pair| {
+        println!(
+            "| {what} | {} | {} | **{:.2}** |",
+            pair.twv, pair.c, pair.ratio.median
+        );
+    };
+    let (x, u, w) = (black_box(&x), black_box(&u), black_box(&w));
+    row(
+        "f",
+        compare(
+            plan,
+            || black_box(jit).f(x, u, black_box(&mut fa)),
+            || c.f(x, u, black_box(&mut fb)),
+        ),
+    );
+    // The JIT's f and ∂f/∂x are two calls (the jobs need f alone or f with J·W); the C's one.
+    row(
+        "f, ∂f/∂x (stored entries; the JIT in two calls)",
+        compare(
+            plan,
+            || {
+                black_box(jit).f(x, u, black_box(&mut fa));
+                black_box(jit).jac_x_sparse(x, u, black_box(&mut ja));
+            },
+            || c.f_jac_x(x, u, black_box(&mut fb), black_box(&mut jb)),
+        ),
+    );
+    row(
+        "f + J·W, K = 9",
+        compare(
+            plan,
+            || black_box(jit).f_jw::<K>(x, u, w, black_box(&mut fa), black_box(&mut wa)),
+            || c.f_jw(x, u, w, black_box(&mut fb), black_box(&mut wb)),
+        ),
+    );
+    println!();
+}
+
 fn main() -> ExitCode {
     let timing = std::env::args().any(|a| a == "--bench");
     match run(timing) {
@@ -165,6 +220,17 @@ fn run(timing: bool) -> Result<(), String> {
     println!(
         "correctness gate passed: the JIT has the interpreter's bits (f + J·W) on all four models"
     );
+    #[cfg(feature = "bicycle-peer")]
+    let wh_c = {
+        use twv_bench::bicycle;
+        let c = bicycle::BicycleC::new(&wh_jit)?;
+        bicycle::gate(&wh_ir, &wh_jit, &c, 16)?;
+        println!(
+            "correctness gate passed: the bicycle's JIT and CasADi's C of its IR agree within \
+             1e-13 of the terms' size (f, ∂f/∂x, J·W) at 17 states"
+        );
+        c
+    };
     if !timing {
         return Ok(());
     }
@@ -213,6 +279,14 @@ fn run(timing: bool) -> Result<(), String> {
         None::<&Interpreted<9, 2>>,
         &wh_jit,
         &wh_int,
+    );
+    println!();
+    #[cfg(feature = "bicycle-peer")]
+    bicycle_against_c(plan, &wh_jit, &wh_c);
+    #[cfg(not(feature = "bicycle-peer"))]
+    println!(
+        "(the bicycle against CasADi's C: build with `--features twv-bench/bicycle-peer`, as \
+         `.ci/speed-report.sh` does)"
     );
     println!();
     let steps = 2_000_000;

@@ -99,6 +99,9 @@ macro_rules! casadi_function {
     };
 }
 
+#[cfg(feature = "bicycle-peer")]
+pub mod bicycle;
+
 casadi_function!(C_F = "vehicle8_f");
 casadi_function!(C_F_JAC_X = "vehicle8_f_jac_x");
 casadi_function!(C_F_JW8 = "vehicle8_f_jw8");
@@ -382,17 +385,22 @@ impl Point {
 
     /// A pseudo-random point: angles and speeds in [-2, 2], inputs in [-20, 20], W in [-1, 1].
     pub fn random(seed: u64) -> Self {
-        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
-        let mut next = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut next = uniform(seed);
         let x = std::array::from_fn(|_| 2.0 * next());
         let u = std::array::from_fn(|_| 20.0 * next());
         let w = std::array::from_fn(|_| std::array::from_fn(|_| next()));
         Self { x, u, w }
+    }
+}
+
+/// Pseudo-random numbers in [-1, 1) from `seed` (xorshift: the gates need no dependency).
+fn uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
     }
 }
 
@@ -527,7 +535,7 @@ impl Scales {
         let jac = output_magnitudes(ir, "f_jac_x", "jac_x", pt)?;
         Ok(Self {
             f: output_magnitudes(ir, "f", "f", pt)?,
-            jw: jw_scale(&jac, pt),
+            jw: jw_scale(&jac, (&Vehicle8::JAC_X_COLIND, &Vehicle8::JAC_X_ROW), &pt.w),
             jac,
         })
     }
@@ -604,12 +612,16 @@ fn check_point(
 
 /// `Σ_c m(J_rc) |w_kc|` for each entry of J·W, with m the size of the terms behind each stored
 /// entry of ∂f/∂x, floored at the smallest normal number so an all-zero row compares exactly.
-fn jw_scale(jac: &[f64], pt: &Point) -> [[f64; NX]; K] {
-    let mut scale = [[f64::MIN_POSITIVE; NX]; K];
-    let cols = (Vehicle8::JAC_X_COLIND.windows(2).enumerate())
+fn jw_scale<const N: usize, const W: usize>(
+    jac: &[f64],
+    (colind, rows): (&[usize], &[usize]),
+    w: &[[f64; N]; W],
+) -> [[f64; N]; W] {
+    let mut scale = [[f64::MIN_POSITIVE; N]; W];
+    let cols = (colind.windows(2).enumerate())
         .flat_map(|(col, pair)| (pair[0]..pair[1]).map(move |_| col));
-    for ((&m, &row), col) in jac.iter().zip(&Vehicle8::JAC_X_ROW).zip(cols) {
-        for (s, wk) in scale.iter_mut().zip(&pt.w) {
+    for ((&m, &row), col) in jac.iter().zip(rows).zip(cols) {
+        for (s, wk) in scale.iter_mut().zip(w) {
             s[row] += m * wk[col].abs();
         }
     }
