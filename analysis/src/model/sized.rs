@@ -238,6 +238,21 @@ macro_rules! forward_model {
             $reach!(self, m => m.f_jw_jac_u_lane_arrays(x, u, w, f, out, jac_u))
         }
 
+
+        #[$attr]
+        fn f_jw_jac_u_lane_arrays_given(
+            &self,
+            x: &[[f64; LANES]; NX],
+            u: &[[f64; LANES]; NU],
+            w: &[[f64; LANES]; NX],
+            f: &mut [[f64; LANES]; NX],
+            out: &mut [[f64; LANES]; NX],
+            jac_u: &mut [[[f64; LANES]; NU]; NX],
+            given: (usize, &([f64; LANES], [f64; LANES])),
+        ) {
+            $reach!(self, m => m.f_jw_jac_u_lane_arrays_given(x, u, w, f, out, jac_u, given))
+        }
+
         #[$attr]
         fn jw<const K: usize>(
             &self,

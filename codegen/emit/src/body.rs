@@ -83,22 +83,73 @@ fn angle_pairs(
     (calls, paired)
 }
 
+/// The states whose sine or cosine is taken directly (`sin(x[i])`, `cos(x[i])`) by any of
+/// `functions`: the kernel computes each of their (sin, cos) once, ahead of the bodies
+/// ([`lane_state_sin_cos`]), rather than once per function (the maps' kernel took vehicle8's
+/// pitch's three times a stage: in `f_jac_x`, in `jac_u`, and the law's setpoint).
+pub fn sin_cos_states(functions: &[&Function]) -> std::collections::BTreeSet<usize> {
+    let mut states = std::collections::BTreeSet::new();
+    for f in functions {
+        let instructions = f.instructions();
+        for instr in instructions {
+            if let Instr::Unary(UnaryOp::Sin | UnaryOp::Cos, x) = *instr {
+                if let Instr::Input { arg: Arg::X, index } = instructions[x] {
+                    states.insert(index);
+                }
+            }
+        }
+    }
+    states
+}
+
+/// The name of state `i`'s lane (sin, cos) that [`lane_state_sin_cos`] binds.
+fn state_sin_cos(i: usize) -> Ident {
+    format_ident!("sc_x{}", i)
+}
+
+/// For each of `states`, `let sc_xI = ...;`: the caller's (sin, cos) when it passed state
+/// I's (`given: Option<(usize, &(Lanes, Lanes))>`), else `wide::sin_cos(xs[I])`.
+pub fn lane_state_sin_cos(states: &std::collections::BTreeSet<usize>) -> TokenStream {
+    let lets = states.iter().map(|&i| {
+        let (sc, idx) = (state_sin_cos(i), index(i));
+        quote! {
+            let #sc = match given {
+                ::core::option::Option::Some((#idx, given)) => *given,
+                _ => wide::sin_cos(xs[#idx]),
+            };
+        }
+    });
+    quote!(let _ = given; #(#lets)*)
+}
+
 /// The `let`s of `f` over lane arrays (`twv_kernels::lanes`), calling the lane operations as
 /// `wide::…`: the kernel brings the module of its instruction set into scope under that name
 /// (`lanes::wide` for AVX-512, `lanes::wide_avx2`, `lanes::wide_neon`), so one body serves
-/// every build.
-/// Each instruction's scalar expression
-/// written out for every lane, states and inputs read from the gathered lane arrays `xs`, `us`.
-/// Per lane these are the operations of [`lets`], in the same order.
-pub fn lane_lets(f: &Function, params: &Params) -> TokenStream {
+/// every build. Each instruction's scalar expression written out for every lane, states and
+/// inputs read from the gathered lane arrays `xs`, `us`; the (sin, cos) of the states in
+/// `state_sin_cos_done` from [`lane_state_sin_cos`] ahead of the body. Per lane these are the
+/// operations of [`lets`], in the same order (a sine is a function of its argument alone).
+pub fn lane_lets(
+    f: &Function,
+    params: &Params,
+    state_sin_cos_done: &std::collections::BTreeSet<usize>,
+) -> TokenStream {
     let (a, b) = (format_ident!("a"), format_ident!("b"));
-    // sin and cos of one angle come from one `lanes::wide::sin_cos` call (`scK` for value K).
+    // sin and cos of one angle come from one `lanes::wide::sin_cos` call (`scK` for value K),
+    // a state's from the call ahead of the body (`sc_xI`) when there is one.
     let mut sin_cos_done = std::collections::BTreeSet::new();
-    let lets = f.instructions().iter().enumerate().map(|(k, instr)| {
+    let instructions = f.instructions();
+    let lets = instructions.iter().enumerate().map(|(k, instr)| {
         let v = value(k);
         if let Instr::Unary(op @ (UnaryOp::Sin | UnaryOp::Cos), x) = *instr {
-            let sc = format_ident!("sc{}", x);
-            let pair = if sin_cos_done.insert(x) {
+            let ahead = match instructions[x] {
+                Instr::Input { arg: Arg::X, index } if state_sin_cos_done.contains(&index) => {
+                    Some(state_sin_cos(index))
+                }
+                _ => None,
+            };
+            let sc = ahead.clone().unwrap_or_else(|| format_ident!("sc{}", x));
+            let pair = if ahead.is_none() && sin_cos_done.insert(x) {
                 let x = value(x);
                 quote!(let #sc = wide::sin_cos(#x);)
             } else {

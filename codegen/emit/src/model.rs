@@ -5,8 +5,8 @@ use quote::{format_ident, quote};
 use twv_ir::{Arg, Function, Ir, Kind, Output};
 
 use crate::body::{
-    float, index, jw_rows, lane_jw_rows, lane_lets, lane_matrix_expr, lane_vector_expr, lets,
-    matrix_expr, vector_expr,
+    float, index, jw_rows, lane_jw_rows, lane_lets, lane_matrix_expr, lane_state_sin_cos,
+    lane_vector_expr, lets, matrix_expr, sin_cos_states, vector_expr,
 };
 use crate::{EmitError, Params};
 
@@ -366,10 +366,13 @@ fn kernels(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
 /// arrays, per lane the operations of the one-point kernel, so every lane has its bits.
 fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
     let (nx, nu) = (&p.nx, &p.nu);
-    let fj_body = lane_lets(p.function("f_jac_x")?, p.params);
+    let (fj, ju) = (p.function("f_jac_x")?, p.function("jac_u")?);
+    let trig_states = sin_cos_states(&[fj, ju]);
+    let state_trig = lane_state_sin_cos(&trig_states);
+    let fj_body = lane_lets(fj, p.params, &trig_states);
     let fj_f = lane_vector_expr(p.output("f_jac_x", "f")?);
     let jw = lane_jw_rows(p.output("f_jac_x", "jac_x")?);
-    let ju_body = lane_lets(p.function("jac_u")?, p.params);
+    let ju_body = lane_lets(ju, p.params, &trig_states);
     let ju_out = lane_matrix_expr(p.output("jac_u", "jac_u")?);
     let params = quote!(
         x_lanes: &[[f64; #nx]; ::twv_kernels::lanes::LANES],
@@ -389,6 +392,13 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
         jac_u_arrays: &mut [[::twv_kernels::lanes::Lanes; #nu]; #nx]
     );
     let array_args = quote!(xs, us, wl, f_arrays, out_arrays, jac_u_arrays);
+    // The (sin, cos) of one state, when the caller has it already.
+    let given_param = quote!(
+        given: ::core::option::Option<(
+            usize,
+            &(::twv_kernels::lanes::Lanes, ::twv_kernels::lanes::Lanes),
+        )>
+    );
     // The body's + − × ÷ and sincos are intrinsics on lane arrays (the vectoriser leaves the
     // per-lane form scalar): built for AVX-512 (one 8-wide register per lane array), for AVX2
     // (two 4-wide ones) and for aarch64's NEON (four 2-wide ones), the same operations in the
@@ -398,6 +408,7 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
     let body = |module: TokenStream| {
         quote! {
             use #module as wide;
+            #state_trig
             #fj_body
             *f_arrays = #fj_f;
             *out_arrays = #jw;
@@ -414,7 +425,10 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
             let mut f_arrays = [[0.0; ::twv_kernels::lanes::LANES]; #nx];
             let mut out_arrays = [[0.0; ::twv_kernels::lanes::LANES]; #nx];
             let mut jac_u_arrays = [[[0.0; ::twv_kernels::lanes::LANES]; #nu]; #nx];
-            self.#arrays(&xs, &us, &wl, &mut f_arrays, &mut out_arrays, &mut jac_u_arrays);
+            self.#arrays(
+                &xs, &us, &wl, &mut f_arrays, &mut out_arrays, &mut jac_u_arrays,
+                ::core::option::Option::None,
+            );
             ::twv_kernels::lanes::scatter(&f_arrays, f_lanes);
             ::twv_kernels::lanes::scatter(&out_arrays, out_lanes);
             ::twv_kernels::lanes::scatter_matrix(&jac_u_arrays, jac_u_lanes);
@@ -479,22 +493,44 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
         /// (the maps' driver) passes without transposing. Every lane has the bits of the
         /// one-point kernel.
         pub fn kernel_variational_lane_arrays(&self, #array_params) {
+            self.kernel_variational_lane_arrays_with(#array_args, ::core::option::Option::None)
+        }
+        /// [`Self::kernel_variational_lane_arrays`] given the lane (sin, cos) of state
+        /// `given.0`, as `twv_kernels::lanes::sin_cos` computes it (the kernel's own bits): a
+        /// caller that needs it too (the maps' sine setpoint, the pitch's) computes it once for
+        /// both. The kernel computes any other state's itself, and ignores a state it does not
+        /// take the sine of.
+        pub fn kernel_variational_lane_arrays_given(
+            &self,
+            #array_params,
+            given: (usize, &(::twv_kernels::lanes::Lanes, ::twv_kernels::lanes::Lanes)),
+        ) {
+            self.kernel_variational_lane_arrays_with(
+                #array_args,
+                ::core::option::Option::Some(given),
+            )
+        }
+        #[inline(always)]
+        fn kernel_variational_lane_arrays_with(&self, #array_params, #given_param) {
             #[cfg(target_arch = "x86_64")]
             {
                 if ::twv_kernels::isa::avx512() {
                     // SAFETY: as in `kernel_variational_lanes`.
-                    return unsafe { self.kernel_variational_lane_arrays_avx512(#array_args) };
+                    return unsafe {
+                        self.kernel_variational_lane_arrays_avx512(#array_args, given)
+                    };
                 }
                 if ::twv_kernels::isa::avx2() {
                     // SAFETY: as in `kernel_variational_lanes`.
-                    return unsafe { self.kernel_variational_lane_arrays_avx2(#array_args) };
+                    return unsafe { self.kernel_variational_lane_arrays_avx2(#array_args, given) };
                 }
             }
             #[cfg(target_arch = "aarch64")]
             if ::twv_kernels::isa::neon() {
                 // SAFETY: NEON is part of every aarch64 CPU.
-                return unsafe { self.kernel_variational_lane_arrays_neon(#array_args) };
+                return unsafe { self.kernel_variational_lane_arrays_neon(#array_args, given) };
             }
+            let _ = given;
             const L: usize = ::twv_kernels::lanes::LANES;
             let (mut x_lanes, mut u_lanes) = ([[0.0; #nx]; L], [[0.0; #nu]; L]);
             let mut w_lanes = [[0.0; #nx]; L];
@@ -527,17 +563,17 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
         }
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx512f,avx512vl")]
-        unsafe fn kernel_variational_lane_arrays_avx512(&self, #array_params) {
+        unsafe fn kernel_variational_lane_arrays_avx512(&self, #array_params, #given_param) {
             #avx512
         }
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2")]
-        unsafe fn kernel_variational_lane_arrays_avx2(&self, #array_params) {
+        unsafe fn kernel_variational_lane_arrays_avx2(&self, #array_params, #given_param) {
             #avx2
         }
         #[cfg(target_arch = "aarch64")]
         #[target_feature(enable = "neon")]
-        fn kernel_variational_lane_arrays_neon(&self, #array_params) {
+        fn kernel_variational_lane_arrays_neon(&self, #array_params, #given_param) {
             #neon
         }
     })
@@ -682,6 +718,20 @@ fn model_impl(p: &Parts, name: &Ident) -> Result<TokenStream, EmitError> {
                 jac_u: &mut [[[f64; ::twv_kernels::lanes::LANES]; #nu]; #nx],
             ) {
                 self.kernel_variational_lane_arrays(x, u, w, f, out, jac_u);
+            }
+
+            #[inline]
+            fn f_jw_jac_u_lane_arrays_given(
+                &self,
+                x: &[[f64; ::twv_kernels::lanes::LANES]; #nx],
+                u: &[[f64; ::twv_kernels::lanes::LANES]; #nu],
+                w: &[[f64; ::twv_kernels::lanes::LANES]; #nx],
+                f: &mut [[f64; ::twv_kernels::lanes::LANES]; #nx],
+                out: &mut [[f64; ::twv_kernels::lanes::LANES]; #nx],
+                jac_u: &mut [[[f64; ::twv_kernels::lanes::LANES]; #nu]; #nx],
+                given: (usize, &([f64; ::twv_kernels::lanes::LANES], [f64; ::twv_kernels::lanes::LANES])),
+            ) {
+                self.kernel_variational_lane_arrays_given(x, u, w, f, out, jac_u, given)
             }
 
             #[inline]

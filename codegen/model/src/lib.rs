@@ -158,6 +158,26 @@ pub trait Model<const NX: usize, const NU: usize> {
         }
     }
 
+    /// [`f_jw_jac_u_lane_arrays`](Self::f_jw_jac_u_lane_arrays) given the lane (sin, cos) of
+    /// state `given.0`, as `twv_kernels::lanes::sin_cos` computes it (the bits the kernel's own
+    /// would have): a caller that needs it too (the maps' sine setpoint needs the pitch's)
+    /// computes it once for both. The default ignores it, as does a kernel that takes no sine
+    /// of that state.
+    #[allow(clippy::too_many_arguments)]
+    fn f_jw_jac_u_lane_arrays_given(
+        &self,
+        x: &[[f64; LANES]; NX],
+        u: &[[f64; LANES]; NU],
+        w: &[[f64; LANES]; NX],
+        f: &mut [[f64; LANES]; NX],
+        out: &mut [[f64; LANES]; NX],
+        jac_u: &mut [[[f64; LANES]; NU]; NX],
+        given: (usize, &([f64; LANES], [f64; LANES])),
+    ) {
+        let _ = given;
+        self.f_jw_jac_u_lane_arrays(x, u, w, f, out, jac_u);
+    }
+
     /// [`f_jw_jac_u_lanes`](Self::f_jw_jac_u_lanes) on lane arrays: entry `i` of point `l` is
     /// `x[i][l]` (and so for every argument), the form a caller that keeps its points that way
     /// passes without transposing. The default transposes around `f_jw_jac_u_lanes`; generated

@@ -148,6 +148,23 @@ where
     }
 
     #[inline]
+    fn f_jw_jac_u_lane_arrays_given(
+        &self,
+        x: &[[f64; LANES]; NX],
+        u: &[[f64; LANES]; P],
+        w: &[[f64; LANES]; NX],
+        f: &mut [[f64; LANES]; NX],
+        out: &mut [[f64; LANES]; NX],
+        jac_u: &mut [[[f64; LANES]; P]; NX],
+        given: (usize, &([f64; LANES], [f64; LANES])),
+    ) {
+        let mut narrow = [[[0.0; LANES]; NU]; NX];
+        self.0
+            .f_jw_jac_u_lane_arrays_given(x, head(u), w, f, out, &mut narrow, given);
+        widen(&narrow, [0.0; LANES], jac_u);
+    }
+
+    #[inline]
     fn jw<const K: usize>(
         &self,
         x: &[f64; NX],

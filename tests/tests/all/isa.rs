@@ -273,3 +273,68 @@ fn only_compiled_in_models_get_builds_of_the_steps_per_instruction_set() {
         keep: [true; 3]
     }));
 }
+
+/// The lanes kernel given a state's (sin, cos) by its caller (the maps' driver, which needs the
+/// pitch's for the sine setpoint) uses it: the pitch's own gives the kernel's bits, a perturbed
+/// one changes f, and a state whose sine the kernel does not take is ignored.
+#[test]
+fn the_lanes_kernel_takes_a_given_states_sin_cos_and_only_where_it_uses_one() {
+    use twv_kernels::lanes::{sin_cos, LANES};
+    use twv_model::Model;
+    let m = Vehicle8::with_defaults();
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    let x: [[f64; LANES]; 8] =
+        std::array::from_fn(|_| std::array::from_fn(|_| rng.gen_range(-1.0..1.0)));
+    let u: [[f64; LANES]; 2] =
+        std::array::from_fn(|_| std::array::from_fn(|_| rng.gen_range(-50.0..50.0)));
+    let w: [[f64; LANES]; 8] =
+        std::array::from_fn(|_| std::array::from_fn(|_| rng.gen_range(-1.0..1.0)));
+    type Out = ([[f64; LANES]; 8], [[f64; LANES]; 8], [[[f64; LANES]; 2]; 8]);
+    type SinCos = ([f64; LANES], [f64; LANES]);
+    let run = |given: Option<(usize, SinCos)>| -> Out {
+        let mut o: Out = ([[0.0; LANES]; 8], [[0.0; LANES]; 8], [[[0.0; LANES]; 2]; 8]);
+        match given {
+            Some((state, sc)) => m.f_jw_jac_u_lane_arrays_given(
+                &x,
+                &u,
+                &w,
+                &mut o.0,
+                &mut o.1,
+                &mut o.2,
+                (state, &sc),
+            ),
+            None => m.f_jw_jac_u_lane_arrays(&x, &u, &w, &mut o.0, &mut o.1, &mut o.2),
+        }
+        o
+    };
+    let bits = |o: &Out| {
+        (o.0.iter().chain(&o.1).chain(o.2.as_flattened()))
+            .flatten()
+            .map(|v| v.to_bits())
+            .collect::<Vec<_>>()
+    };
+    let own = run(None);
+    // vehicle8's pitch φ is state 0, its heading state 3; state 1 (x) has no sine in it.
+    for state in [0, 3] {
+        assert_eq!(
+            bits(&run(Some((state, sin_cos(x[state]))))),
+            bits(&own),
+            "state {state}"
+        );
+        let (mut s, c) = sin_cos(x[state]);
+        s[2] += 1e-3;
+        let moved = run(Some((state, (s, c))));
+        assert_ne!(
+            bits(&moved),
+            bits(&own),
+            "a changed sin of state {state} went unused"
+        );
+    }
+    let (s, c) = sin_cos(x[1]);
+    let ignored = run(Some((1, (s.map(|v| v + 0.5), c))));
+    assert_eq!(
+        bits(&ignored),
+        bits(&own),
+        "state 1's sine is not the kernel's"
+    );
+}

@@ -70,18 +70,19 @@ impl SetpointLanes {
             .or_else(|| all(&sine).map(|amplitude| Self::Sine { amplitude }))
     }
 
-    /// Φ_ref and dΦ_ref/dΦ of every lane at its Φ: the bits of [`Setpoint::eval`].
+    /// Φ_ref and dΦ_ref/dΦ of every lane at its Φ: the bits of [`Setpoint::eval`]; and the
+    /// lane (sin Φ, cos Φ) if the setpoint took them.
     #[inline(always)]
-    fn eval(&self, phi: &Lanes) -> (Lanes, Lanes) {
+    fn eval(&self, phi: &Lanes) -> (Lanes, Lanes, Option<(Lanes, Lanes)>) {
         match self {
-            Self::Fixed { value } => (*value, [0.0; LANES]),
+            Self::Fixed { value } => (*value, [0.0; LANES], None),
             Self::Sine { amplitude } => {
                 let (s, c) = twv_kernels::lanes::sin_cos(*phi);
-                let mut out = ([0.0; LANES], [0.0; LANES]);
+                let (mut phi_ref, mut slope) = ([0.0; LANES], [0.0; LANES]);
                 for l in 0..LANES {
-                    (out.0[l], out.1[l]) = (amplitude[l] * s[l], amplitude[l] * c[l]);
+                    (phi_ref[l], slope[l]) = (amplitude[l] * s[l], amplitude[l] * c[l]);
                 }
-                out
+                (phi_ref, slope, Some((s, c)))
             }
         }
     }
@@ -148,7 +149,9 @@ where
     ) {
         let mut u = [[0.0; LANES]; NU];
         let mut du = [[0.0; LANES]; NU];
-        match &self.pd {
+        // A sine setpoint takes the pitch's lane (sin, cos), and so may the lanes kernel: it is
+        // computed once, for both (the maps' kernel took the pitch's three times a stage).
+        let pitch_sin_cos = match &self.pd {
             Some(pd) => pd.eval(y, &mut u, &mut du),
             None => {
                 let setpoints = self.setpoints(&y.x[self.loops[0].plant.measured.phi]);
@@ -167,18 +170,20 @@ where
                         }
                     }
                 }
+                None
             }
-        }
+        };
         let x: &[Lanes; NX] = y.x[..NX].try_into().expect("NX ≤ NA");
         let w: &[Lanes; NX] = y.w[..NX].try_into().expect("NX ≤ NA");
         let (fx, jwx): (&mut [Lanes; NX], &mut [Lanes; NX]) = (
             (&mut dy.x[..NX]).try_into().expect("NX ≤ NA"),
             (&mut dy.w[..NX]).try_into().expect("NX ≤ NA"),
         );
-        let b = &mut self.b;
-        self.loops[0]
-            .model
-            .f_jw_jac_u_lane_arrays(x, &u, w, fx, jwx, b);
+        let (b, model) = (&mut self.b, self.loops[0].model);
+        match &pitch_sin_cos {
+            Some(sc) => model.f_jw_jac_u_lane_arrays_given(x, &u, w, fx, jwx, b, (sc.0, &sc.1)),
+            None => model.f_jw_jac_u_lane_arrays(x, &u, w, fx, jwx, b),
+        }
         // J·w of the loop: the model's plus ∂f/∂u · ∂u/∂x·w, the dot product as `assemble`
         // forms it (every term added to `-0.0`, the start of `f64`'s `Sum`).
         for (out, b) in jwx.iter_mut().zip(&*b) {
@@ -220,7 +225,8 @@ where
 }
 
 impl<const NU: usize> PdLanes<NU> {
-    /// u and ∂u/∂x·w of every lane (`u[k][l]`, `du[k][l]`). The operations of
+    /// u and ∂u/∂x·w of every lane (`u[k][l]`, `du[k][l]`), and the lane (sin, cos) of Φ if the
+    /// setpoint took it, with Φ's state index (for the kernel). The operations of
     /// [`PidLoop::law_at`] and [`PidLoop::tangent`] for this law, entry by entry in the same
     /// order, with the gradient rows never stored: row entries that are zero there are the same
     /// `+0` here, and the dot products still add every term from `-0.0` (the start of `f64`'s
@@ -231,9 +237,9 @@ impl<const NU: usize> PdLanes<NU> {
         y: &LaneStates<NA, LANES>,
         u: &mut [Lanes; NU],
         du: &mut [Lanes; NU],
-    ) {
+    ) -> Option<(usize, (Lanes, Lanes))> {
         let (phi, rate) = (&y.x[self.phi], &y.x[self.rate]);
-        let (phi_ref, dsp) = self.setpoint.eval(phi);
+        let (phi_ref, dsp, sin_cos) = self.setpoint.eval(phi);
         let mut force = [0.0; LANES];
         let mut saturated = [false; LANES];
         let mut de_phi = [0.0; LANES];
@@ -246,14 +252,13 @@ impl<const NU: usize> PdLanes<NU> {
             let d = 1.0 + -1.0 * dsp;
             de_phi[l] = d;
             let cmd = self.kp[l] * e + self.kd[l] * rate[l];
+            // `law_at`'s clamp (above F_max: F_max, else below −F_max: −F_max, else the
+            // command, NaN included) as two selects, which vectorise across the lanes.
             let fm = self.force_max[l];
-            (force[l], saturated[l]) = if cmd > fm {
-                (fm, true)
-            } else if cmd < -fm {
-                (-fm, true)
-            } else {
-                (cmd, false)
-            };
+            let (above, below) = (cmd > fm, cmd < -fm);
+            let clamped = if below { -fm } else { cmd };
+            force[l] = if above { fm } else { clamped };
+            saturated[l] = above | below;
         }
         // ∂F/∂x·w and ∂(yaw)/∂x·w. The gradient of F (the command's, zero while saturated) is
         // +0 at every entry but Φ and Φ̇ (0 + Kp·0 with a finite Kp, see `pd_lanes`), the yaw's
@@ -292,5 +297,6 @@ impl<const NU: usize> PdLanes<NU> {
                 du[k][l] = fdir[k] * d_force_w[l] + ydir[k] * d_yaw_w[l];
             }
         }
+        sin_cos.map(|sc| (self.phi, sc))
     }
 }
