@@ -112,7 +112,8 @@ fn resolve(lit: &LitStr) -> syn::Result<PathBuf> {
         .find(|candidate| candidate.is_file())
         .ok_or_else(|| {
             let msg = format!(
-                "{}: no such file in the calling crate's directory or any parent directory",
+                "{}: no such file in the calling crate's directory, twv-macros' own \
+                 directory, or any of their parents",
                 lit.value()
             );
             syn::Error::new(lit.span(), msg)
