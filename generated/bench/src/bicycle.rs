@@ -9,7 +9,9 @@ use twv_model::Model;
 
 use std::ffi::c_int;
 
-use crate::{jw_scale, magnitude, uniform, CFunction, CasadiInt, Entry};
+use crate::{
+    check_within, jw_scale, no_mismatches, output_magnitudes, uniform, CFunction, CasadiInt, Entry,
+};
 
 /// The bicycle's states, inputs, and the tangent vectors of its J·W (one per state).
 pub const NX: usize = 9;
@@ -121,26 +123,12 @@ pub fn gate(ir: &Ir, jit: &Interpreted<NX, NU>, c: &BicycleC, n_random: u64) -> 
     let mut errors = Vec::new();
     for seed in 0..=n_random {
         let (x, u, w) = point(seed);
+        let at = format!("point {seed}");
         let mut check = |what: &str, jit: &[f64], c: &[f64], scale: &[f64]| {
-            for (e, ((&a, &b), &m)) in jit.iter().zip(c).zip(scale).enumerate() {
-                // A NaN anywhere is a disagreement.
-                let agree = (a - b).abs() <= 1e-13 * m;
-                if !agree {
-                    errors.push(format!(
-                        "point {seed}: {what}[{e}]: JIT {a:e}, C {b:e}, scale {m:e}"
-                    ));
-                }
-            }
+            check_within(&mut errors, &at, what, jit, c, scale)
         };
-        let scale = |function: &str, output: &str| -> Result<Vec<f64>, String> {
-            let f = ir
-                .function(function)
-                .ok_or_else(|| format!("no IR function `{function}`"))?;
-            let out = f
-                .output(output)
-                .ok_or_else(|| format!("`{function}` has no `{output}`"))?;
-            let m = magnitude::magnitudes(f, &x, &u, jit.params())?;
-            Ok(out.values.iter().map(|&v| m[v]).collect())
+        let scale = |function: &str, output: &str| {
+            output_magnitudes(ir, function, output, (&x, &u, jit.params()))
         };
         let (f_scale, jac_scale) = (scale("f", "f")?, scale("f_jac_x", "jac_x")?);
 
@@ -168,16 +156,7 @@ pub fn gate(ir: &Ir, jit: &Interpreted<NX, NU>, c: &BicycleC, n_random: u64) -> 
             jw_scale.as_flattened(),
         );
     }
-    if errors.is_empty() {
-        return Ok(());
-    }
-    let n = errors.len();
-    errors.truncate(12);
-    Err(format!(
-        "{n} mismatches between the bicycle's JIT and CasADi's C (first {}):\n  {}",
-        errors.len(),
-        errors.join("\n  ")
-    ))
+    no_mismatches(errors, "the bicycle's JIT (twv) and CasADi's C")
 }
 
 #[cfg(test)]

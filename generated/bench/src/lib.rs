@@ -465,17 +465,7 @@ pub fn gate(n_random: u64) -> Result<(), String> {
             &mut errors,
         );
     }
-    if errors.is_empty() {
-        Ok(())
-    } else {
-        let n = errors.len();
-        errors.truncate(12);
-        Err(format!(
-            "{n} mismatches between twv and CasADi's C (first {}):\n  {}",
-            errors.len(),
-            errors.join("\n  ")
-        ))
-    }
+    no_mismatches(errors, "twv and CasADi's C")
 }
 
 /// The hand formulation's C (runtime and baked) against the generated Rust at the bench point
@@ -532,9 +522,10 @@ struct Scales {
 
 impl Scales {
     fn at(ir: &Ir, pt: &Point) -> Result<Self, String> {
-        let jac = output_magnitudes(ir, "f_jac_x", "jac_x", pt)?;
+        let at = (&pt.x[..], &pt.u[..], &Vehicle8::DEFAULTS[..]);
+        let jac = output_magnitudes(ir, "f_jac_x", "jac_x", at)?;
         Ok(Self {
-            f: output_magnitudes(ir, "f", "f", pt)?,
+            f: output_magnitudes(ir, "f", "f", at)?,
             jw: jw_scale(&jac, (&Vehicle8::JAC_X_COLIND, &Vehicle8::JAC_X_ROW), &pt.w),
             jac,
         })
@@ -552,16 +543,51 @@ fn output_magnitudes(
     ir: &Ir,
     function: &str,
     output: &str,
-    pt: &Point,
+    (x, u, p): (&[f64], &[f64], &[f64]),
 ) -> Result<Vec<f64>, String> {
     let f = ir
         .function(function)
-        .ok_or_else(|| format!("vehicle8 IR has no `{function}`"))?;
+        .ok_or_else(|| format!("{} IR has no `{function}`", ir.model()))?;
     let out = f
         .output(output)
         .ok_or_else(|| format!("`{function}` has no output `{output}`"))?;
-    let m = magnitude::magnitudes(f, &pt.x, &pt.u, &Vehicle8::DEFAULTS)?;
+    let m = magnitude::magnitudes(f, x, u, p)?;
     Ok(out.values.iter().map(|&v| m[v]).collect())
+}
+
+/// Adds to `errors` each entry where twv's value and the C's differ by more than 1e-13 of the
+/// size of the terms behind it (`scale`), named `{at}: {what}[entry]`. Written so that NaN on
+/// either side is a mismatch.
+fn check_within(
+    errors: &mut Vec<String>,
+    at: &str,
+    what: &str,
+    twv: &[f64],
+    c: &[f64],
+    scale: &[f64],
+) {
+    for (e, ((&r, &c), &m)) in twv.iter().zip(c).zip(scale).enumerate() {
+        let agree = (r - c).abs() <= 1e-13 * m;
+        if !agree {
+            errors.push(format!(
+                "{at}: {what}[{e}]: twv {r:e}, CasADi C {c:e}, scale {m:e}"
+            ));
+        }
+    }
+}
+
+/// `Ok` without `errors`, else the count of mismatches `between` two sides and the first 12.
+fn no_mismatches(mut errors: Vec<String>, between: &str) -> Result<(), String> {
+    if errors.is_empty() {
+        return Ok(());
+    }
+    let n = errors.len();
+    errors.truncate(12);
+    Err(format!(
+        "{n} mismatches between {between} (first {}):\n  {}",
+        errors.len(),
+        errors.join("\n  ")
+    ))
 }
 
 fn check_point(
@@ -573,15 +599,7 @@ fn check_point(
     errors: &mut Vec<String>,
 ) {
     let mut check = |what: &str, rust: &[f64], c: &[f64], scale: &[f64]| {
-        for (e, ((&r, &c), &m)) in rust.iter().zip(c).zip(scale).enumerate() {
-            // Written so that NaN on either side is a mismatch.
-            let agree = (r - c).abs() <= 1e-13 * m;
-            if !agree {
-                errors.push(format!(
-                    "{at}: {what}[{e}]: twv {r:e}, CasADi C {c:e}, scale {m:e}"
-                ));
-            }
-        }
+        check_within(errors, at, what, rust, c, scale)
     };
     let (x, u, w) = (&pt.x, &pt.u, &pt.w);
     let (mut fr, mut fc) = ([0.0; NX], [0.0; NX]);
