@@ -12,6 +12,9 @@ use super::PidLoop;
 use crate::control::settings::Setpoint;
 use crate::integrate::{one_row, LaneStates};
 
+/// The lane (sin Φ, cos Φ) a sine setpoint takes, which the lanes kernel can take too.
+type SinCos = (Lanes, Lanes);
+
 /// Eight closed loops of one model, evaluated together with one tangent vector each.
 pub struct LoopLanes<'a, M, const NX: usize, const NU: usize, const NA: usize> {
     loops: [PidLoop<'a, M, NX, NU, NA>; LANES],
@@ -73,7 +76,7 @@ impl SetpointLanes {
     /// Φ_ref and dΦ_ref/dΦ of every lane at its Φ: the bits of [`Setpoint::eval`]; and the
     /// lane (sin Φ, cos Φ) if the setpoint took them.
     #[inline(always)]
-    fn eval(&self, phi: &Lanes) -> (Lanes, Lanes, Option<(Lanes, Lanes)>) {
+    fn eval(&self, phi: &Lanes) -> (Lanes, Lanes, Option<SinCos>) {
         match self {
             Self::Fixed { value } => (*value, [0.0; LANES], None),
             Self::Sine { amplitude } => {
@@ -150,11 +153,13 @@ where
         let mut u = [[0.0; LANES]; NU];
         let mut du = [[0.0; LANES]; NU];
         // A sine setpoint takes the pitch's lane (sin, cos), and so may the lanes kernel: it is
-        // computed once, for both (the maps' kernel took the pitch's three times a stage).
+        // computed once, for both, on either path (the maps' kernel took the pitch's three
+        // times a stage).
         let pitch_sin_cos = match &self.pd {
             Some(pd) => pd.eval(y, &mut u, &mut du),
             None => {
-                let setpoints = self.setpoints(&y.x[self.loops[0].plant.measured.phi]);
+                let phi = self.loops[0].plant.measured.phi;
+                let (setpoints, sin_cos) = self.setpoints(&y.x[phi]);
                 for (l, lp) in self.loops.iter().enumerate() {
                     let point = y.point(l);
                     // Reduced at once to what is needed later: copying eight whole laws (their
@@ -170,7 +175,7 @@ where
                         }
                     }
                 }
-                None
+                sin_cos.map(|sc| (phi, sc))
             }
         };
         let x: &[Lanes; NX] = y.x[..NX].try_into().expect("NX ≤ NA");
@@ -201,17 +206,19 @@ where
     }
 
     /// Each loop's setpoint at its Φ (`phi`), as [`Setpoint::eval`] gives it, with the sines of
-    /// all eight from one lane-wise sincos (the same bits) when any loop's setpoint needs one.
+    /// all eight from one lane-wise sincos (the same bits) when any loop's setpoint needs one;
+    /// and that lane (sin Φ, cos Φ) if it was taken.
     #[inline(always)]
-    fn setpoints(&self, phi: &Lanes) -> [(f64, f64); LANES] {
+    fn setpoints(&self, phi: &Lanes) -> ([(f64, f64); LANES], Option<SinCos>) {
         let sine = |l: &PidLoop<'a, M, NX, NU, NA>| {
             matches!(l.settings.pitch.setpoint, Setpoint::Sine { .. })
         };
-        let (s, c) = if self.loops.iter().any(sine) {
-            twv_kernels::lanes::sin_cos(*phi)
-        } else {
-            ([0.0; LANES], [0.0; LANES])
-        };
+        let sin_cos = self
+            .loops
+            .iter()
+            .any(sine)
+            .then(|| twv_kernels::lanes::sin_cos(*phi));
+        let (s, c) = sin_cos.unwrap_or(([0.0; LANES], [0.0; LANES]));
         let mut out = [(0.0, 0.0); LANES];
         for l in 0..LANES {
             out[l] = self.loops[l]
@@ -220,7 +227,7 @@ where
                 .setpoint
                 .eval_with(|| (s[l], c[l]));
         }
-        out
+        (out, sin_cos)
     }
 }
 
@@ -237,7 +244,7 @@ impl<const NU: usize> PdLanes<NU> {
         y: &LaneStates<NA, LANES>,
         u: &mut [Lanes; NU],
         du: &mut [Lanes; NU],
-    ) -> Option<(usize, (Lanes, Lanes))> {
+    ) -> Option<(usize, SinCos)> {
         let (phi, rate) = (&y.x[self.phi], &y.x[self.rate]);
         let (phi_ref, dsp, sin_cos) = self.setpoint.eval(phi);
         let mut force = [0.0; LANES];
