@@ -393,12 +393,11 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
     );
     let array_args = quote!(xs, us, wl, f_arrays, out_arrays, jac_u_arrays);
     // The (sin, cos) of one state, when the caller has it already.
-    let given_param = quote!(
-        given: ::core::option::Option<(
-            usize,
-            &(::twv_kernels::lanes::Lanes, ::twv_kernels::lanes::Lanes),
-        )>
-    );
+    let given_type = quote!((
+        usize,
+        &(::twv_kernels::lanes::Lanes, ::twv_kernels::lanes::Lanes)
+    ));
+    let given_param = quote!(given: ::core::option::Option<#given_type>);
     // The body's + − × ÷ and sincos are intrinsics on lane arrays (the vectoriser leaves the
     // per-lane form scalar): built for AVX-512 (one 8-wide register per lane array), for AVX2
     // (two 4-wide ones) and for aarch64's NEON (four 2-wide ones), the same operations in the
@@ -503,7 +502,7 @@ fn variational_lanes(p: &Parts) -> Result<TokenStream, EmitError> {
         pub fn kernel_variational_lane_arrays_given(
             &self,
             #array_params,
-            given: (usize, &(::twv_kernels::lanes::Lanes, ::twv_kernels::lanes::Lanes)),
+            given: #given_type,
         ) {
             self.kernel_variational_lane_arrays_with(
                 #array_args,
